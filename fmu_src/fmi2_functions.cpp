@@ -1,0 +1,234 @@
+// The FMI 2.0 Co-Simulation functions: thin wrappers over Instance. Each one
+// checks the call sequence (allowed states per the standard's table, FMI 2.0
+// section 4.2.4), and no exception ever crosses the C boundary.
+#include <exception>
+
+#include "fmi2Functions.h"
+#include "instance.hpp"
+
+using mfbd::FmuState;
+using mfbd::Instance;
+
+namespace {
+
+constexpr unsigned bit(FmuState s) { return static_cast<unsigned>(s); }
+constexpr unsigned kInstantiated = bit(FmuState::Instantiated);
+constexpr unsigned kInit = bit(FmuState::InitializationMode);
+constexpr unsigned kStepComplete = bit(FmuState::StepComplete);
+constexpr unsigned kStepFailed = bit(FmuState::StepFailed);
+constexpr unsigned kTerminated = bit(FmuState::Terminated);
+constexpr unsigned kError = bit(FmuState::Error);
+constexpr unsigned kAny = kInstantiated | kInit | kStepComplete | kStepFailed | kTerminated | kError;
+constexpr unsigned kGet = kInit | kStepComplete | kStepFailed | kTerminated | kError;
+constexpr unsigned kSet = kInstantiated | kInit | kStepComplete;
+constexpr unsigned kStatus = kStepComplete | kStepFailed | kTerminated;
+
+// Runs `body` on a checked instance; maps exceptions to fmi2Error.
+template <class Body>
+fmi2Status guarded(fmi2Component c, const char* function, unsigned mask, Body body) {
+  if (!c) return fmi2Error;
+  Instance* instance = static_cast<Instance*>(c);
+  if (!instance->allow(function, mask)) return fmi2Error;
+  try {
+    return body(instance);
+  } catch (const std::bad_alloc&) {
+    return instance->fail(function, "out of memory");
+  } catch (const std::exception& e) {
+    return instance->fail(function, std::string("internal error: ") + e.what());
+  }
+}
+
+}  // namespace
+
+extern "C" {
+
+const char* fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char* fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions* functions,
+                              fmi2Boolean /*visible*/, fmi2Boolean loggingOn) {
+  auto report = [&](const char* message) {
+    if (functions && functions->logger)
+      functions->logger(functions->componentEnvironment, instanceName ? instanceName : "", fmi2Error,
+                        "logStatusError", "fmi2Instantiate: %s", message);
+  };
+  if (!instanceName || !*instanceName) {
+    report("instanceName must be a non-empty string");
+    return nullptr;
+  }
+  if (fmuType != fmi2CoSimulation) {
+    report("this FMU supports Co-Simulation only (fmuType must be fmi2CoSimulation)");
+    return nullptr;
+  }
+  if (!fmuGUID || !fmuResourceLocation) {
+    report("fmuGUID and fmuResourceLocation must not be null");
+    return nullptr;
+  }
+  try {
+    return Instance::create(instanceName, fmuGUID, fmuResourceLocation, functions, loggingOn);
+  } catch (const std::exception& e) {
+    report(e.what());
+    return nullptr;
+  }
+}
+
+void fmi2FreeInstance(fmi2Component c) { delete static_cast<Instance*>(c); }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t n, const fmi2String categories[]) {
+  return guarded(c, "fmi2SetDebugLogging", kAny,
+                 [&](Instance* i) { return i->setDebugLogging(loggingOn, n, categories); });
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+  return guarded(c, "fmi2SetupExperiment", kInstantiated, [&](Instance* i) {
+    return i->setupExperiment(toleranceDefined, tolerance, startTime, stopTimeDefined, stopTime);
+  });
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+  return guarded(c, "fmi2EnterInitializationMode", kInstantiated,
+                 [](Instance* i) { return i->enterInitializationMode(); });
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+  return guarded(c, "fmi2ExitInitializationMode", kInit, [](Instance* i) { return i->exitInitializationMode(); });
+}
+
+fmi2Status fmi2Terminate(fmi2Component c) {
+  return guarded(c, "fmi2Terminate", kStepComplete | kStepFailed, [](Instance* i) { return i->terminate(); });
+}
+
+fmi2Status fmi2Reset(fmi2Component c) {
+  return guarded(c, "fmi2Reset", kAny, [](Instance* i) { return i->reset(); });
+}
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
+  return guarded(c, "fmi2GetReal", kGet, [&](Instance* i) { return i->getReal(vr, n, value); });
+}
+
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer[]) {
+  return guarded(c, "fmi2GetInteger", kGet,
+                 [&](Instance* i) { return i->noVariablesOfType("fmi2GetInteger", "Integer", n, vr); });
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Boolean[]) {
+  return guarded(c, "fmi2GetBoolean", kGet,
+                 [&](Instance* i) { return i->noVariablesOfType("fmi2GetBoolean", "Boolean", n, vr); });
+}
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2String[]) {
+  return guarded(c, "fmi2GetString", kGet,
+                 [&](Instance* i) { return i->noVariablesOfType("fmi2GetString", "String", n, vr); });
+}
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real value[]) {
+  return guarded(c, "fmi2SetReal", kSet, [&](Instance* i) { return i->setReal(vr, n, value); });
+}
+
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer[]) {
+  return guarded(c, "fmi2SetInteger", kSet,
+                 [&](Instance* i) { return i->noVariablesOfType("fmi2SetInteger", "Integer", n, vr); });
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Boolean[]) {
+  return guarded(c, "fmi2SetBoolean", kSet,
+                 [&](Instance* i) { return i->noVariablesOfType("fmi2SetBoolean", "Boolean", n, vr); });
+}
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2String[]) {
+  return guarded(c, "fmi2SetString", kSet,
+                 [&](Instance* i) { return i->noVariablesOfType("fmi2SetString", "String", n, vr); });
+}
+
+// Capabilities declared false in modelDescription.xml: each returns fmi2Error
+// with a log line rather than pretending.
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate*) {
+  return guarded(c, "fmi2GetFMUstate", kAny, [](Instance* i) {
+    return i->unsupported("fmi2GetFMUstate", "not supported (canGetAndSetFMUstate=false)");
+  });
+}
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate) {
+  return guarded(c, "fmi2SetFMUstate", kAny, [](Instance* i) {
+    return i->unsupported("fmi2SetFMUstate", "not supported (canGetAndSetFMUstate=false)");
+  });
+}
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate*) {
+  return guarded(c, "fmi2FreeFMUstate", kAny, [](Instance* i) {
+    return i->unsupported("fmi2FreeFMUstate", "not supported (canGetAndSetFMUstate=false)");
+  });
+}
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate, size_t*) {
+  return guarded(c, "fmi2SerializedFMUstateSize", kAny, [](Instance* i) {
+    return i->unsupported("fmi2SerializedFMUstateSize", "not supported (canSerializeFMUstate=false)");
+  });
+}
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate, fmi2Byte[], size_t) {
+  return guarded(c, "fmi2SerializeFMUstate", kAny, [](Instance* i) {
+    return i->unsupported("fmi2SerializeFMUstate", "not supported (canSerializeFMUstate=false)");
+  });
+}
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte[], size_t, fmi2FMUstate*) {
+  return guarded(c, "fmi2DeSerializeFMUstate", kAny, [](Instance* i) {
+    return i->unsupported("fmi2DeSerializeFMUstate", "not supported (canSerializeFMUstate=false)");
+  });
+}
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference[], size_t,
+                                        const fmi2ValueReference[], size_t, const fmi2Real[], fmi2Real[]) {
+  return guarded(c, "fmi2GetDirectionalDerivative", kAny, [](Instance* i) {
+    return i->unsupported("fmi2GetDirectionalDerivative", "not supported (providesDirectionalDerivative=false)");
+  });
+}
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2Integer[],
+                                       const fmi2Real[]) {
+  return guarded(c, "fmi2SetRealInputDerivatives", kAny, [](Instance* i) {
+    return i->unsupported("fmi2SetRealInputDerivatives", "not supported (canInterpolateInputs=false)");
+  });
+}
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2Integer[],
+                                        fmi2Real[]) {
+  return guarded(c, "fmi2GetRealOutputDerivatives", kAny, [](Instance* i) {
+    return i->unsupported("fmi2GetRealOutputDerivatives", "not supported (maxOutputDerivativeOrder=0)");
+  });
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+                      fmi2Boolean /*noSetFMUStatePriorToCurrentPoint*/) {
+  return guarded(c, "fmi2DoStep", kStepComplete,
+                 [&](Instance* i) { return i->doStep(currentCommunicationPoint, communicationStepSize); });
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c) {
+  return guarded(c, "fmi2CancelStep", kAny, [](Instance* i) {
+    return i->unsupported("fmi2CancelStep", "steps are synchronous; there is nothing to cancel");
+  });
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind, fmi2Status*) {
+  return guarded(c, "fmi2GetStatus", kStatus, [](Instance* i) {
+    return i->unsupported("fmi2GetStatus", "steps are synchronous; no fmi2Status kind is available");
+  });
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value) {
+  return guarded(c, "fmi2GetRealStatus", kStatus, [&](Instance* i) { return i->getRealStatus(s, value); });
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind, fmi2Integer*) {
+  return guarded(c, "fmi2GetIntegerStatus", kStatus, [](Instance* i) {
+    return i->unsupported("fmi2GetIntegerStatus", "no Integer status kind is available");
+  });
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value) {
+  return guarded(c, "fmi2GetBooleanStatus", kStatus, [&](Instance* i) { return i->getBooleanStatus(s, value); });
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind, fmi2String*) {
+  return guarded(c, "fmi2GetStringStatus", kStatus, [](Instance* i) {
+    return i->unsupported("fmi2GetStringStatus", "no String status kind is available (steps are synchronous)");
+  });
+}
+
+}  // extern "C"

@@ -1,0 +1,320 @@
+#include "instance.hpp"
+
+#include <cmath>
+#include <cstdarg>
+#include <fstream>
+#include <sstream>
+
+#include "model_description.hpp"
+#include "resource_uri.hpp"
+
+namespace mfbd {
+
+namespace {
+
+const char* stateName(FmuState s) {
+  switch (s) {
+    case FmuState::Instantiated: return "Instantiated";
+    case FmuState::InitializationMode: return "InitializationMode";
+    case FmuState::StepComplete: return "StepComplete";
+    case FmuState::StepFailed: return "StepFailed";
+    case FmuState::Terminated: return "Terminated";
+    case FmuState::Error: return "Error";
+  }
+  return "?";
+}
+
+bool readFile(const std::string& path, std::string& text) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream s;
+  s << in.rdbuf();
+  text = s.str();
+  return true;
+}
+
+}  // namespace
+
+void Instance::log(fmi2Status status, const char* category, const std::string& message) const {
+  if (!callbacks_.logger) return;
+  // Errors and discards always reach the importer; the rest when enabled.
+  const bool always = status == fmi2Error || status == fmi2Fatal || status == fmi2Discard;
+  if (!always && !(loggingOn_ && (categories_.empty() || categories_.count(category) || categories_.count("logAll"))))
+    return;
+  std::string escaped;  // the logger takes a printf format
+  for (char c : message) escaped += c == '%' ? std::string("%%") : std::string(1, c);
+  callbacks_.logger(callbacks_.componentEnvironment, name_.c_str(), status, category, escaped.c_str());
+}
+
+fmi2Status Instance::fail(const char* function, const std::string& message) {
+  log(fmi2Error, "logStatusError", std::string(function) + ": " + message);
+  return fmi2Error;
+}
+
+Instance* Instance::create(const std::string& name, const std::string& guid, const std::string& resourceUri,
+                           const fmi2CallbackFunctions* callbacks, bool loggingOn) {
+  std::unique_ptr<Instance> c(new Instance());
+  c->name_ = name;
+  if (callbacks) c->callbacks_ = *callbacks;
+  c->loggingOn_ = loggingOn;
+  std::string dir, why;
+  if (!resourceUriToPath(resourceUri, dir, why)) {
+    c->fail("fmi2Instantiate", "fmuResourceLocation: " + why);
+    return nullptr;
+  }
+  if (!dir.empty() && dir.back() != '/') dir += '/';
+  if (!readFile(dir + "scene.json", c->sceneText_)) {
+    c->fail("fmi2Instantiate", "cannot read the scene " + dir + "scene.json");
+    return nullptr;
+  }
+  const std::string expected = sceneGuid(c->sceneText_);
+  if (guid != expected) {
+    c->fail("fmi2Instantiate", "fmuGUID \"" + guid + "\" does not match this FMU's scene (expected \"" +
+                                   expected + "\"): modelDescription.xml and resources/scene.json disagree");
+    return nullptr;
+  }
+  try {
+    c->scene_ = parseScene(c->sceneText_);
+    Simulation check(c->scene_);  // assembly errors surface here, not later
+  } catch (const SceneError& e) {
+    c->fail("fmi2Instantiate", std::string("resources/scene.json: ") + e.what());
+    return nullptr;
+  }
+  c->table_ = variableTable(c->scene_);
+  c->values_.resize(c->table_.size());
+  for (std::size_t i = 0; i < c->table_.size(); ++i) {
+    c->byReference_[c->table_[i].valueReference] = i;
+    c->values_[i] = c->table_[i].start;
+  }
+  c->log(fmi2OK, "logEvents", "instantiated scene '" + c->scene_.name + "' with " +
+                                  std::to_string(c->table_.size()) + " variables");
+  return c.release();
+}
+
+bool Instance::allow(const char* function, unsigned mask) {
+  if (static_cast<unsigned>(state_) & mask) return true;
+  fail(function, std::string("not allowed in state ") + stateName(state_));
+  return false;
+}
+
+fmi2Status Instance::setDebugLogging(bool on, std::size_t n, const fmi2String categories[]) {
+  std::set<std::string> chosen;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::string c = categories && categories[i] ? categories[i] : "";
+    bool known = false;
+    for (const auto& k : logCategories()) known = known || k.first == c;
+    if (!known) return fail("fmi2SetDebugLogging", "unknown log category \"" + c + "\"");
+    chosen.insert(c);
+  }
+  loggingOn_ = on;
+  categories_ = chosen;
+  return fmi2OK;
+}
+
+fmi2Status Instance::setupExperiment(bool, double, double startTime, bool stopTimeDefined, double stopTime) {
+  if (!std::isfinite(startTime)) return fail("fmi2SetupExperiment", "startTime must be finite");
+  if (stopTimeDefined && !(stopTime >= startTime))
+    return fail("fmi2SetupExperiment", "stopTime must be >= startTime");
+  startTime_ = startTime;
+  stopTimeDefined_ = stopTimeDefined;
+  stopTime_ = stopTime;
+  return fmi2OK;
+}
+
+// Scene with the current parameter values -> Simulation at startTime.
+bool Instance::buildSimulation(const char* function) {
+  std::map<std::string, double> userValues;
+  for (std::size_t i = 0; i < table_.size(); ++i)
+    if (table_[i].quantity.kind == QuantityKind::UserParameter) userValues[table_[i].name] = values_[i];
+  try {
+    Scene scene = parseScene(sceneText_, userValues);
+    for (std::size_t i = 0; i < table_.size(); ++i)
+      if (table_[i].causality == Causality::Parameter) setSceneParameter(scene, table_[i].quantity, values_[i]);
+    simulation_ = std::make_unique<Simulation>(scene);
+  } catch (const SceneError& e) {
+    fail(function, std::string("with the parameter values set: ") + e.what());
+    return false;
+  }
+  for (std::size_t i = 0; i < table_.size(); ++i)
+    if (table_[i].causality == Causality::Input) simulation_->write(table_[i].quantity, values_[i]);
+  std::string message;
+  if (!simulation_->initialize(startTime_, message)) {
+    fail(function, "initialization failed: " + message);
+    simulation_.reset();
+    return false;
+  }
+  simulationStale_ = false;
+  lastSuccessfulTime_ = startTime_;
+  return true;
+}
+
+fmi2Status Instance::enterInitializationMode() {
+  if (!buildSimulation("fmi2EnterInitializationMode")) {
+    state_ = FmuState::Error;
+    return fmi2Error;
+  }
+  state_ = FmuState::InitializationMode;
+  log(fmi2OK, "logEvents", "initialization mode at t = " + std::to_string(startTime_));
+  return fmi2OK;
+}
+
+fmi2Status Instance::exitInitializationMode() {
+  if (simulationStale_ && !buildSimulation("fmi2ExitInitializationMode")) {
+    state_ = FmuState::Error;
+    return fmi2Error;
+  }
+  state_ = FmuState::StepComplete;
+  return fmi2OK;
+}
+
+fmi2Status Instance::terminate() {
+  state_ = FmuState::Terminated;
+  log(fmi2OK, "logEvents", "terminated at t = " + std::to_string(currentTime()));
+  return fmi2OK;
+}
+
+fmi2Status Instance::reset() {
+  simulation_.reset();
+  simulationStale_ = true;
+  for (std::size_t i = 0; i < table_.size(); ++i) values_[i] = table_[i].start;
+  startTime_ = 0.0;
+  stopTimeDefined_ = false;
+  lastSuccessfulTime_ = 0.0;
+  terminatedBySlave_ = false;
+  state_ = FmuState::Instantiated;
+  log(fmi2OK, "logEvents", "reset to start values");
+  return fmi2OK;
+}
+
+double Instance::currentTime() const { return simulation_ ? simulation_->time() : startTime_; }
+
+fmi2Status Instance::getReal(const fmi2ValueReference vr[], std::size_t n, fmi2Real value[]) {
+  if (n > 0 && (!vr || !value)) return fail("fmi2GetReal", "null array argument");
+  if (simulationStale_ && state_ == FmuState::InitializationMode && !buildSimulation("fmi2GetReal"))
+    return fmi2Error;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto it = byReference_.find(vr[i]);
+    if (it == byReference_.end())
+      return fail("fmi2GetReal", "no Real variable with value reference " + std::to_string(vr[i]));
+    const Variable& v = table_[it->second];
+    if (v.causality != Causality::Output) {
+      value[i] = values_[it->second];
+      continue;
+    }
+    value[i] = simulation_->read(v.quantity);
+    if (!std::isfinite(value[i])) {
+      value[i] = 0.0;
+      return fail("fmi2GetReal", "output '" + v.name + "' is not finite");
+    }
+  }
+  return fmi2OK;
+}
+
+bool Instance::checkValue(const Variable& v, double value, std::string& why) const {
+  if (!std::isfinite(value)) {
+    why = "expected a finite value";
+    return false;
+  }
+  switch (v.quantity.kind) {
+    case QuantityKind::StepSizeMax:
+      if (value > 0.0) return true;
+      why = "expected h_max > 0";
+      return false;
+    case QuantityKind::SpectralRadius:
+      if (value >= 0.0 && value <= 1.0) return true;
+      why = "expected a spectral radius in [0, 1]";
+      return false;
+    case QuantityKind::JointDamping:
+      if (value >= 0.0) return true;
+      why = "expected damping >= 0";
+      return false;
+    case QuantityKind::UserParameter: {
+      // The scene must stay valid with the new value: parse it to see.
+      std::map<std::string, double> userValues;
+      for (std::size_t i = 0; i < table_.size(); ++i)
+        if (table_[i].quantity.kind == QuantityKind::UserParameter) userValues[table_[i].name] = values_[i];
+      userValues[v.name] = value;
+      try {
+        Simulation check(parseScene(sceneText_, userValues));
+      } catch (const SceneError& e) {
+        why = std::string("the scene would be invalid: ") + e.what();
+        return false;
+      }
+      return true;
+    }
+    default: return true;
+  }
+}
+
+fmi2Status Instance::setReal(const fmi2ValueReference vr[], std::size_t n, const fmi2Real value[]) {
+  if (n > 0 && (!vr || !value)) return fail("fmi2SetReal", "null array argument");
+  const bool running = state_ == FmuState::StepComplete;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto it = byReference_.find(vr[i]);
+    if (it == byReference_.end())
+      return fail("fmi2SetReal", "no Real variable with value reference " + std::to_string(vr[i]));
+    const Variable& v = table_[it->second];
+    if (v.causality == Causality::Output) return fail("fmi2SetReal", "'" + v.name + "' is an output");
+    if (running && v.variability == Variability::Fixed)
+      return fail("fmi2SetReal",
+                  "'" + v.name + "' is a fixed parameter; it can be set only before fmi2ExitInitializationMode");
+    std::string why;
+    if (!checkValue(v, value[i], why))
+      return fail("fmi2SetReal", "'" + v.name + "' = " + std::to_string(value[i]) + ": " + why);
+    values_[it->second] = value[i];
+    if (v.variability == Variability::Fixed) simulationStale_ = true;
+    else if (simulation_) simulation_->write(v.quantity, value[i]);
+  }
+  return fmi2OK;
+}
+
+fmi2Status Instance::noVariablesOfType(const char* function, const char* type, std::size_t n,
+                                       const fmi2ValueReference vr[]) {
+  if (n == 0) return fmi2OK;
+  return fail(function, std::string("no ") + type + " variable with value reference " +
+                            std::to_string(vr ? vr[0] : 0) + " (this FMU has Real variables only)");
+}
+
+fmi2Status Instance::doStep(double t, double H) {
+  const double now = simulation_->time();
+  if (!std::isfinite(H) || H <= 0.0) return fail("fmi2DoStep", "communicationStepSize must be > 0, got " + std::to_string(H));
+  if (!std::isfinite(t) || std::abs(t - now) > 1e-9 * std::max(1.0, std::abs(now)))
+    return fail("fmi2DoStep", "currentCommunicationPoint " + std::to_string(t) + " is not the FMU's time " +
+                                  std::to_string(now));
+  if (stopTimeDefined_ && now + H > stopTime_ + 1e-9 * std::max(1.0, std::abs(stopTime_)))
+    return fail("fmi2DoStep", "the step would pass stopTime " + std::to_string(stopTime_));
+  const AdvanceResult result = simulation_->doStep(H);
+  if (!result.ok) {
+    state_ = FmuState::StepFailed;
+    lastSuccessfulTime_ = simulation_->time();
+    terminatedBySlave_ = true;
+    log(fmi2Discard, "logStatusDiscard",
+        "fmi2DoStep: " + result.message + "; state restored to t = " + std::to_string(lastSuccessfulTime_));
+    return fmi2Discard;
+  }
+  lastSuccessfulTime_ = simulation_->time();
+  const IntegratorState& s = simulation_->state();
+  std::ostringstream msg;
+  msg << "t = " << s.t << ": substeps " << s.substeps << ", Newton iterations " << s.newtonIterations
+      << ", factorizations " << s.factorizations << ", rejected " << s.rejectedSubsteps;
+  log(fmi2OK, "logStep", msg.str());
+  return fmi2OK;
+}
+
+fmi2Status Instance::getRealStatus(fmi2StatusKind kind, fmi2Real* value) {
+  if (!value) return fail("fmi2GetRealStatus", "null value argument");
+  if (kind != fmi2LastSuccessfulTime) return fail("fmi2GetRealStatus", "only fmi2LastSuccessfulTime is available");
+  *value = lastSuccessfulTime_;
+  return fmi2OK;
+}
+
+fmi2Status Instance::getBooleanStatus(fmi2StatusKind kind, fmi2Boolean* value) {
+  if (!value) return fail("fmi2GetBooleanStatus", "null value argument");
+  if (kind != fmi2Terminated) return fail("fmi2GetBooleanStatus", "only fmi2Terminated is available");
+  *value = terminatedBySlave_ ? fmi2True : fmi2False;
+  return fmi2OK;
+}
+
+fmi2Status Instance::unsupported(const char* function, const char* why) { return fail(function, why); }
+
+}  // namespace mfbd

@@ -1,0 +1,81 @@
+// One FMU instance: the FMI 2.0 Co-Simulation state machine (checked in one
+// place, `allow`), the variable table, start values, and the Simulation.
+#pragma once
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "fmi2Functions.h"
+#include "variable_table.hpp"
+
+namespace mfbd {
+
+enum class FmuState : unsigned {
+  Instantiated = 1u << 0,
+  InitializationMode = 1u << 1,
+  StepComplete = 1u << 2,
+  StepFailed = 1u << 3,
+  Terminated = 1u << 4,
+  Error = 1u << 5,
+};
+
+class Instance {
+ public:
+  // Returns nullptr (after logging why) when the scene or GUID is bad.
+  static Instance* create(const std::string& name, const std::string& guid, const std::string& resourceUri,
+                          const fmi2CallbackFunctions* callbacks, bool loggingOn);
+
+  // Call-sequence check: logs and returns false if `function` may not be
+  // called in the current state. Masks are FmuState bits.
+  bool allow(const char* function, unsigned mask);
+
+  fmi2Status setDebugLogging(bool on, std::size_t n, const fmi2String categories[]);
+  fmi2Status setupExperiment(bool toleranceDefined, double tolerance, double startTime, bool stopTimeDefined,
+                             double stopTime);
+  fmi2Status enterInitializationMode();
+  fmi2Status exitInitializationMode();
+  fmi2Status terminate();
+  fmi2Status reset();
+  fmi2Status getReal(const fmi2ValueReference vr[], std::size_t n, fmi2Real value[]);
+  fmi2Status setReal(const fmi2ValueReference vr[], std::size_t n, const fmi2Real value[]);
+  // Integer/Boolean/String: the scene has none of these; any reference is unknown.
+  fmi2Status noVariablesOfType(const char* function, const char* type, std::size_t n, const fmi2ValueReference vr[]);
+  fmi2Status doStep(double currentCommunicationPoint, double communicationStepSize);
+  fmi2Status getRealStatus(fmi2StatusKind kind, fmi2Real* value);
+  fmi2Status getBooleanStatus(fmi2StatusKind kind, fmi2Boolean* value);
+  fmi2Status unsupported(const char* function, const char* why);
+
+  void log(fmi2Status status, const char* category, const std::string& message) const;
+  fmi2Status fail(const char* function, const std::string& message);  // logs, returns fmi2Error
+
+ private:
+  Instance() = default;
+  bool buildSimulation(const char* function);
+  bool checkValue(const Variable& v, double value, std::string& why) const;
+  double currentTime() const;
+
+  std::string name_;
+  fmi2CallbackFunctions callbacks_{};
+  bool loggingOn_ = false;
+  std::set<std::string> categories_;
+  FmuState state_ = FmuState::Instantiated;
+
+  std::string sceneText_;
+  Scene scene_;  // parsed with the default parameter values
+  std::vector<Variable> table_;
+  std::unordered_map<fmi2ValueReference, std::size_t> byReference_;
+  std::vector<double> values_;  // parameters and inputs, by table index
+
+  std::unique_ptr<Simulation> simulation_;
+  bool simulationStale_ = true;  // a fixed parameter changed since it was built
+  double startTime_ = 0.0;
+  bool stopTimeDefined_ = false;
+  double stopTime_ = 0.0;
+  double lastSuccessfulTime_ = 0.0;
+  bool terminatedBySlave_ = false;
+};
+
+}  // namespace mfbd

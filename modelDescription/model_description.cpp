@@ -1,0 +1,165 @@
+#include "model_description.hpp"
+
+#include <iomanip>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace mfbd {
+
+const std::vector<std::pair<std::string, std::string>>& logCategories() {
+  static const std::vector<std::pair<std::string, std::string>> categories = {
+      {"logEvents", "Initialization, reset, termination"},
+      {"logSingularLinearSystems", "Singular iteration matrices"},
+      {"logNonlinearSystems", "Newton iterations that fail or slow down"},
+      {"logStatusWarning", "Calls that return fmi2Warning"},
+      {"logStatusDiscard", "Steps that return fmi2Discard"},
+      {"logStatusError", "Calls that return fmi2Error"},
+      {"logStep", "Per communication step: substeps, Newton iterations"},
+      {"logAll", "Everything"},
+  };
+  return categories;
+}
+
+namespace {
+
+std::string escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string number(double x) {
+  std::ostringstream s;
+  s << std::setprecision(17) << x;
+  return s.str();
+}
+
+// SI base-unit exponents of the units the table uses (FMI 2.0 BaseUnit).
+std::string baseUnit(const std::string& unit) {
+  static const std::map<std::string, std::string> known = {
+      {"m", "m=\"1\""},
+      {"s", "s=\"1\""},
+      {"kg", "kg=\"1\""},
+      {"rad", "rad=\"1\""},
+      {"m/s", "m=\"1\" s=\"-1\""},
+      {"m/s2", "m=\"1\" s=\"-2\""},
+      {"rad/s", "rad=\"1\" s=\"-1\""},
+      {"N", "kg=\"1\" m=\"1\" s=\"-2\""},
+      {"N.m", "kg=\"1\" m=\"2\" s=\"-2\""},
+      {"N.s/m", "kg=\"1\" s=\"-1\""},
+      {"N.m.s/rad", "kg=\"1\" m=\"2\" s=\"-1\" rad=\"-1\""},
+      {"kg.m2", "kg=\"1\" m=\"2\""},
+  };
+  const auto it = known.find(unit);
+  return it == known.end() ? "" : it->second;
+}
+
+const char* causalityName(Causality c) {
+  switch (c) {
+    case Causality::Parameter: return "parameter";
+    case Causality::Input: return "input";
+    case Causality::Output: return "output";
+  }
+  return "";
+}
+
+const char* variabilityName(Variability v) {
+  switch (v) {
+    case Variability::Fixed: return "fixed";
+    case Variability::Tunable: return "tunable";
+    case Variability::Continuous: return "continuous";
+  }
+  return "";
+}
+
+void writeUnits(std::ostream& x, const std::vector<Variable>& table) {
+  std::set<std::string> units;
+  for (const Variable& v : table)
+    if (!v.unit.empty()) units.insert(v.unit);
+  if (units.empty()) return;
+  x << "  <UnitDefinitions>\n";
+  for (const std::string& u : units) {
+    const std::string base = baseUnit(u);
+    if (base.empty()) x << "    <Unit name=\"" << escape(u) << "\"/>\n";
+    else x << "    <Unit name=\"" << escape(u) << "\"><BaseUnit " << base << "/></Unit>\n";
+  }
+  x << "  </UnitDefinitions>\n";
+}
+
+void writeVariables(std::ostream& x, const std::vector<Variable>& table) {
+  x << "  <ModelVariables>\n";
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    const Variable& v = table[i];
+    x << "    <!-- index " << i + 1 << " -->\n";
+    x << "    <ScalarVariable name=\"" << escape(v.name) << "\" valueReference=\"" << v.valueReference
+      << "\" causality=\"" << causalityName(v.causality) << "\" variability=\"" << variabilityName(v.variability)
+      << "\"";
+    if (v.causality != Causality::Output) x << " initial=\"exact\"";
+    x << " description=\"" << escape(v.description) << "\">\n      <Real";
+    if (!v.unit.empty()) x << " unit=\"" << escape(v.unit) << "\"";
+    if (v.causality != Causality::Output) x << " start=\"" << number(v.start) << "\"";
+    x << "/>\n    </ScalarVariable>\n";
+  }
+  x << "  </ModelVariables>\n";
+}
+
+// Outputs: positions and velocities do not depend directly on inputs; joint
+// reactions do (through the accelerations). Initial unknowns depend on all
+// parameters and inputs (no dependencies attribute).
+void writeStructure(std::ostream& x, const std::vector<Variable>& table) {
+  std::string inputs;
+  for (std::size_t i = 0; i < table.size(); ++i)
+    if (table[i].causality == Causality::Input) inputs += (inputs.empty() ? "" : " ") + std::to_string(i + 1);
+  x << "  <ModelStructure>\n    <Outputs>\n";
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    if (table[i].causality != Causality::Output) continue;
+    const QuantityKind k = table[i].quantity.kind;
+    const bool feedthrough = k == QuantityKind::JointReactionForce || k == QuantityKind::JointReactionTorque;
+    x << "      <Unknown index=\"" << i + 1 << "\" dependencies=\"" << (feedthrough ? inputs : "") << "\"/>\n";
+  }
+  x << "    </Outputs>\n    <InitialUnknowns>\n";
+  for (std::size_t i = 0; i < table.size(); ++i)
+    if (table[i].causality == Causality::Output) x << "      <Unknown index=\"" << i + 1 << "\"/>\n";
+  x << "    </InitialUnknowns>\n  </ModelStructure>\n";
+}
+
+}  // namespace
+
+std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>& table, const std::string& guid,
+                                const std::string& modelIdentifier, const Capabilities& caps) {
+  auto flag = [](bool b) { return b ? "true" : "false"; };
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << escape(scene.name) << "\" guid=\"" << guid
+    << "\" description=\"" << escape(scene.description) << "\" generationTool=\"MFBD-FMU mfbd-pack\""
+    << " variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n"
+    << "  <CoSimulation modelIdentifier=\"" << escape(modelIdentifier) << "\""
+    << " needsExecutionTool=\"false\" canHandleVariableCommunicationStepSize=\"true\""
+    << " canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\""
+    << " canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\""
+    << " canGetAndSetFMUstate=\"" << flag(caps.canGetAndSetFMUstate) << "\" canSerializeFMUstate=\""
+    << flag(caps.canSerializeFMUstate) << "\" providesDirectionalDerivative=\"false\"/>\n";
+  writeUnits(x, table);
+  x << "  <LogCategories>\n";
+  for (const auto& [name, description] : logCategories())
+    x << "    <Category name=\"" << name << "\" description=\"" << escape(description) << "\"/>\n";
+  x << "  </LogCategories>\n";
+  x << "  <DefaultExperiment startTime=\"" << number(scene.experiment.startTime) << "\" stopTime=\""
+    << number(scene.experiment.stopTime) << "\" stepSize=\"" << number(scene.experiment.outputInterval)
+    << "\"/>\n";
+  writeVariables(x, table);
+  writeStructure(x, table);
+  x << "</fmiModelDescription>\n";
+  return x.str();
+}
+
+}  // namespace mfbd

@@ -1,0 +1,154 @@
+#include "variable_table.hpp"
+
+#include <cstdint>
+#include <cstdio>
+
+#include "scene/joint_dofs.hpp"
+
+namespace mfbd {
+
+namespace {
+
+const char* kAxes[3] = {"x", "y", "z"};
+const char* kQuaternion[4] = {"w", "x", "y", "z"};
+
+bool isAngle(const std::string& coordinate) {
+  return coordinate == "angle" || coordinate == "angle1" || coordinate == "angle2" ||
+         coordinate.rfind("rotation", 0) == 0;
+}
+
+bool selected(bool all, const std::vector<std::string>& names, const std::string& name) {
+  if (all) return true;
+  for (const auto& n : names)
+    if (n == name) return true;
+  return false;
+}
+
+class TableBuilder {
+ public:
+  void add(std::string name, Causality c, Variability v, std::string unit, std::string description, Quantity q,
+           double start = 0.0) {
+    Variable var;
+    var.name = std::move(name);
+    var.valueReference = unsigned(table.size());
+    var.causality = c;
+    var.variability = v;
+    var.unit = std::move(unit);
+    var.description = std::move(description);
+    var.quantity = q;
+    var.start = start;
+    table.push_back(std::move(var));
+  }
+  void output(const std::string& name, const std::string& unit, const std::string& description, Quantity q) {
+    add(name, Causality::Output, Variability::Continuous, unit, description, q);
+  }
+  std::vector<Variable> table;
+};
+
+}  // namespace
+
+std::vector<std::string> jointCoordinateNames(JointType type) {
+  switch (type) {
+    case JointType::Revolute: return {"angle"};
+    case JointType::Prismatic: return {"position"};
+    case JointType::Cylindrical: return {"angle", "position"};
+    case JointType::Universal: return {"angle1", "angle2"};
+    case JointType::Spherical: return {"rotation_x", "rotation_y", "rotation_z"};
+    case JointType::Planar: return {"x", "y", "angle"};
+    case JointType::Fixed: return {};
+    case JointType::Free: return {"x", "y", "z", "rotation_x", "rotation_y", "rotation_z"};
+  }
+  return {};
+}
+
+std::vector<Variable> variableTable(const Scene& scene) {
+  TableBuilder t;
+  using QK = QuantityKind;
+  const Causality P = Causality::Parameter;
+  const Variability F = Variability::Fixed;
+
+  // Parameters.
+  for (int i = 0; i < int(scene.parameters.size()); ++i) {
+    const ParameterSpec& p = scene.parameters[i];
+    t.add(p.name, P, F, p.unit, p.description, {QK::UserParameter, i}, p.value);
+  }
+  for (int c = 0; c < 3; ++c)
+    t.add(std::string("gravity.") + kAxes[c], P, F, "m/s2", "gravitational acceleration, world",
+          {QK::Gravity, 0, c}, scene.gravity[c]);
+  t.add("solver.h_max", P, F, "s", "largest implicit substep", {QK::StepSizeMax}, scene.solver.hMax);
+  t.add("solver.rho_inf", P, F, "", "generalized-alpha spectral radius at infinity", {QK::SpectralRadius},
+        scene.solver.rhoInf);
+  for (int j = 0; j < int(scene.joints.size()); ++j) {
+    const JointSpec& jt = scene.joints[j];
+    if (jointDofs(jt.type) == 0) continue;
+    const bool rotational = jt.type == JointType::Revolute;
+    t.add(jt.name + ".damping", P, Variability::Tunable, rotational ? "N.m.s/rad" : "",
+          "viscous damping per joint DOF", {QK::JointDamping, j}, jt.damping);
+  }
+
+  // Inputs: generalized joint forces along the DOFs of actuated joints.
+  for (int j = 0; j < int(scene.joints.size()); ++j) {
+    const JointSpec& jt = scene.joints[j];
+    if (!jt.torqueInput) continue;
+    const auto names = jointCoordinateNames(jt.type);
+    for (int d = 0; d < int(names.size()); ++d) {
+      const bool angular = isAngle(names[d]);
+      const std::string name = names.size() == 1 ? (angular ? "torque" : "force")
+                                                 : (angular ? "torque_" : "force_") + names[d];
+      t.add(jt.name + "." + name, Causality::Input, Variability::Continuous, angular ? "N.m" : "N",
+            "generalized force along " + names[d], {QK::JointForceInput, j, d}, 0.0);
+    }
+  }
+
+  // Outputs: joints, then bodies, as the scene selects.
+  for (int j = 0; j < int(scene.joints.size()); ++j) {
+    const JointSpec& jt = scene.joints[j];
+    if (!selected(scene.outputs.allJoints, scene.outputs.joints, jt.name)) continue;
+    const auto names = jointCoordinateNames(jt.type);
+    for (int d = 0; d < int(names.size()); ++d) {
+      const bool angular = isAngle(names[d]);
+      t.output(jt.name + "." + names[d], angular ? "rad" : "m", "joint coordinate", {QK::JointCoordinate, j, d});
+      t.output(jt.name + "." + names[d] + "_rate", angular ? "rad/s" : "m/s", "joint rate", {QK::JointRate, j, d});
+    }
+    for (int c = 0; c < 3; ++c)
+      t.output(jt.name + ".reaction_force." + kAxes[c], "N",
+               "force of the parent on the child, child marker frame", {QK::JointReactionForce, j, c});
+    for (int c = 0; c < 3; ++c)
+      t.output(jt.name + ".reaction_torque." + kAxes[c], "N.m",
+               "torque of the parent on the child about the joint origin, child marker frame",
+               {QK::JointReactionTorque, j, c});
+  }
+  for (int b = 0; b < int(scene.bodies.size()); ++b) {
+    const std::string& name = scene.bodies[b].name;
+    if (!selected(scene.outputs.allBodies, scene.outputs.bodies, name)) continue;
+    for (int c = 0; c < 3; ++c)
+      t.output(name + ".position." + kAxes[c], "m", "body frame origin, world", {QK::BodyPosition, b, c});
+    for (int c = 0; c < 4; ++c)
+      t.output(name + ".orientation." + kQuaternion[c], "", "unit quaternion body -> world",
+               {QK::BodyOrientation, b, c});
+    for (int c = 0; c < 3; ++c)
+      t.output(name + ".velocity." + kAxes[c], "m/s", "velocity of the body frame origin, world",
+               {QK::BodyVelocity, b, c});
+    for (int c = 0; c < 3; ++c)
+      t.output(name + ".angular_velocity." + kAxes[c], "rad/s", "angular velocity, world",
+               {QK::BodyAngularVelocity, b, c});
+  }
+  return t.table;
+}
+
+std::string sceneGuid(const std::string& sceneText) {
+  // Two 64-bit FNV-1a hashes with different offsets make 128 bits.
+  const std::string salted = "mfbd-fmu variable table v1\n" + sceneText;
+  std::uint64_t h1 = 0xcbf29ce484222325ull, h2 = 0x84222325cbf29ce4ull;
+  for (unsigned char c : salted) {
+    h1 = (h1 ^ c) * 0x100000001b3ull;
+    h2 = (h2 ^ c) * 0x100000001b3ull;
+    h2 ^= h2 >> 29;
+  }
+  char out[40];
+  std::snprintf(out, sizeof out, "{%08x-%04x-%04x-%04x-%012llx}", unsigned(h1 >> 32), unsigned((h1 >> 16) & 0xffff),
+                unsigned(h1 & 0xffff), unsigned(h2 >> 48), static_cast<unsigned long long>(h2 & 0xffffffffffffull));
+  return out;
+}
+
+}  // namespace mfbd

@@ -1,0 +1,16 @@
+// A minimal ZIP archive writer (stored entries, no compression): all an .fmu needs.
+#pragma once
+#include <string>
+#include <vector>
+
+namespace mfbd {
+
+struct ZipEntry {
+  std::string name;  // path inside the archive, '/' separated
+  std::string data;
+};
+
+// Throws std::runtime_error naming the file if it cannot be written.
+void writeZip(const std::string& path, const std::vector<ZipEntry>& entries);
+
+}  // namespace mfbd

@@ -1,0 +1,96 @@
+// Two-node 3D corotational beam element (DESIGN.md 3 "Flexible bodies").
+//
+// Element-independent corotational formulation after Battini & Pacoste,
+// "Co-rotational beam elements with warping effects in instability problems",
+// CMAME 191 (2002): the corotated frame has x along the current
+// chord and y, z from the mean of the two nodes' section y axes (their
+// variant of Crisfield's mean-rotation frame, same invariance, simpler
+// derivative).
+// Local deformations e_l = [u; theta1; theta2] (elongation and rotation
+// vectors of the nodes relative to the corotated frame, logSO3) carry a local
+// linear Timoshenko stiffness; f = B^T f_l with the consistent tangent
+// K = B^T K_l B + d(B^T)/dq f_l.
+//
+// Node and force conventions are those of flex/nodal_inertia.hpp; element
+// vectors are ordered [f1 (world); m1 (node-1 frame); f2; m2], tangents are
+// derivatives with respect to the increments [dr1; dtheta1; dr2; dtheta2].
+#pragma once
+#include "flex/beam_section.hpp"
+#include "flex/nodal_inertia.hpp"
+
+namespace mfbd {
+
+using Vec7 = Eigen::Matrix<double, 7, 1>;
+using Mat7 = Eigen::Matrix<double, 7, 7>;
+using Vec12 = Eigen::Matrix<double, 12, 1>;
+using Mat12 = Eigen::Matrix<double, 12, 12>;
+
+// Constant data of one element, fixed by its stress-free reference.
+struct CorotationalBeam {
+  // Reference (stress-free) poses of the two nodes. The element frame E0 has
+  // x along the reference chord and y = sectionY orthogonalised against x.
+  // Throws std::invalid_argument if the nodes coincide or sectionY is
+  // (nearly) parallel to the chord.
+  static CorotationalBeam fromReference(const NodePose& n1, const NodePose& n2,
+                                        const Vec3& sectionY,
+                                        const BeamSection& section);
+
+  double L0 = 0.0;  // reference length [m]
+  // Element frame seen from each node: A_i0 * C_i = E0, so A_i * C_i is
+  // node i's copy of the element frame in any configuration.
+  Mat3 C1 = Mat3::Identity();
+  Mat3 C2 = Mat3::Identity();
+  BeamSection section;
+  Mat7 localStiffness = Mat7::Zero();  // on [u; theta1; theta2]
+};
+
+// Local deformations and corotated frame of a configuration (for outputs).
+struct LocalDeformation {
+  Mat3 frame = Mat3::Identity();  // corotated element frame (columns e1 e2 e3, world)
+  double length = 0.0;            // current chord length
+  double u = 0.0;                 // elongation l - L0
+  Vec3 theta1 = Vec3::Zero();     // log(frame^T A1 C1)
+  Vec3 theta2 = Vec3::Zero();
+  bool valid = false;             // false: frame undefined (see internalForces)
+};
+
+LocalDeformation localDeformation(const CorotationalBeam& beam, const NodePose& n1,
+                                  const NodePose& n2);
+
+// Internal force of elasticity plus stiffness-proportional damping,
+//   f = B^T (K_l e_l + beta K_l edot_l),   edot_l = B [v1; omega1; v2; omega2],
+// the force the nodes exert on the element (residual: M a + f = f_ext), with
+//   K = df/d[dr1; dtheta1; dr2; dtheta2] at fixed velocities (exact, the
+//       damping force's position dependence included),
+//   C = df/d[v1; omega1; v2; omega2] = beta B^T K_l B.
+// valid = false (and f, K, C zero) when the corotated frame is undefined: a
+// collapsed chord, or local rotations near 90 deg / relative twist near
+// 180 deg; callers treat it as a failed Newton iterate.
+struct BeamForces {
+  Vec12 f = Vec12::Zero();
+  Mat12 K = Mat12::Zero();
+  Mat12 C = Mat12::Zero();
+  bool valid = false;
+};
+
+BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
+                          const NodePose& n2, const NodeVelocity& v1,
+                          const NodeVelocity& v2, double dampingBeta);
+
+// Stress resultants at the element ends in the corotated element frame,
+// force (N, Vy, Vz) and moment (T, My, Mz); at each end the action of the
+// part at larger x on the part at smaller x (N > 0 in tension), computed
+// from an element force vector f as returned by internalForces.
+struct SectionForces {
+  Vec3 force1 = Vec3::Zero(), moment1 = Vec3::Zero();  // at node 1 (x = 0)
+  Vec3 force2 = Vec3::Zero(), moment2 = Vec3::Zero();  // at node 2 (x = l)
+};
+
+SectionForces sectionForces(const CorotationalBeam& beam, const NodePose& n1,
+                            const NodePose& n2, const Vec12& f);
+
+// Lumped inertia of half the element at node 1 or 2 (node = 1 or 2):
+// m = rhoA L0 / 2, J = C_i diag(rhoJ) C_i^T L0 / 2 in the node frame.
+NodalInertia lumpedNodalInertia(const CorotationalBeam& beam, int node);
+
+}  // namespace mfbd

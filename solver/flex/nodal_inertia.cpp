@@ -1,0 +1,27 @@
+#include "flex/nodal_inertia.hpp"
+
+namespace mfbd {
+
+NodalInertiaForces nodalInertiaForces(const NodalInertia& inertia,
+                                      const NodeVelocity& velocity,
+                                      const NodeAcceleration& acceleration) {
+  const Vec3& w = velocity.omega;
+  const Vec3 Jw = inertia.J * w;
+  NodalInertiaForces out;
+  // Euler's equations in the body (node) frame: J wdot + w x J w.
+  out.f.head<3>() = inertia.m * acceleration.a;
+  out.f.tail<3>() = inertia.J * acceleration.omegaDot + w.cross(Jw);
+  out.M.topLeftCorner<3, 3>() = inertia.m * Mat3::Identity();
+  out.M.bottomRightCorner<3, 3>() = inertia.J;
+  // d(w x J w)/dw = skew(w) J - skew(J w)
+  out.G.bottomRightCorner<3, 3>() = skew(w) * inertia.J - skew(Jw);
+  return out;
+}
+
+Vec6 nodalGravityForce(const NodalInertia& inertia, const Vec3& gravity) {
+  Vec6 f = Vec6::Zero();
+  f.head<3>() = inertia.m * gravity;
+  return f;
+}
+
+}  // namespace mfbd

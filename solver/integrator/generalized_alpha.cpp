@@ -1,0 +1,194 @@
+#include "integrator/generalized_alpha.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace mfbd {
+
+GeneralizedAlpha::GeneralizedAlpha(const SolverOptions& options) : options_(options) {
+  const double rho = options.rhoInf;
+  alphaM_ = (2.0 * rho - 1.0) / (rho + 1.0);
+  alphaF_ = rho / (rho + 1.0);
+  gamma_ = 0.5 + alphaF_ - alphaM_;
+  beta_ = 0.25 * (gamma_ + 0.5) * (gamma_ + 0.5);
+}
+
+namespace {
+bool allFinite(const VectorXd& x) { return x.allFinite(); }
+
+SparseMatrix buildMatrix(int n, int m, const Triplets& iteration, const Triplets& constraintJacobian) {
+  Triplets all = iteration;
+  all.reserve(iteration.size() + 2 * constraintJacobian.size());
+  for (const auto& t : constraintJacobian) {
+    all.emplace_back(n + t.row(), t.col(), t.value());
+    all.emplace_back(t.col(), n + t.row(), t.value());
+  }
+  SparseMatrix S(n + m, n + m);
+  S.setFromTriplets(all.begin(), all.end());
+  // Keep every diagonal entry structurally present so the pattern is stable.
+  for (int i = 0; i < n + m; ++i) S.coeffRef(i, i) += 0.0;
+  S.makeCompressed();
+  return S;
+}
+}  // namespace
+
+bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std::string& message) {
+  const int n = system.velocityCount(), m = system.constraintCount();
+  if (m != 0) {
+    message = "consistent initial accelerations with constraints are not implemented yet";
+    return false;
+  }
+  state.vdot = VectorXd::Zero(n);
+  state.lambda = VectorXd::Zero(m);
+  VectorXd r, phi;
+  system.residual(state.t, state.q, state.v, state.vdot, state.lambda, r, phi);
+  Triplets M, G;
+  system.tangent(state.t, state.q, state.v, state.vdot, state.lambda, 1.0, 0.0, 0.0, M, G);
+  LinearSolver mass;
+  const SparseMatrix S = buildMatrix(n, m, M, G);
+  mass.analyzePattern(S);
+  if (mass.factorize(S) != LinearSolver::Status::Ok) {
+    message = "the mass matrix is singular at the initial configuration";
+    return false;
+  }
+  state.vdot = -mass.solve(r);
+  state.a = state.vdot;
+  if (!allFinite(state.vdot)) {
+    message = "initial accelerations are not finite";
+    return false;
+  }
+  if (state.h <= 0.0) state.h = options_.hMax;
+  return true;
+}
+
+bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial, double h) {
+  const int n = system.velocityCount(), m = system.constraintCount();
+  const double betaPrime = (1.0 - alphaM_) / (beta_ * h * h * (1.0 - alphaF_));
+  const double gammaPrime = gamma_ / (beta_ * h);
+  Triplets iteration, jacobian;
+  system.tangent(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, 1.0, gammaPrime / betaPrime, 1.0 / betaPrime,
+                 iteration, jacobian);
+  const SparseMatrix S = buildMatrix(n, m, iteration, jacobian);
+  if (patternSize_ != n + m) {
+    solver_.analyzePattern(S);
+    patternSize_ = n + m;
+  }
+  if (solver_.factorize(S) != LinearSolver::Status::Ok) return false;
+  factoredStep_ = h;
+  return true;
+}
+
+bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
+  const int n = system.velocityCount(), m = system.constraintCount();
+  const double betaPrime = (1.0 - alphaM_) / (beta_ * h * h * (1.0 - alphaF_));
+  const double gammaPrime = gamma_ / (beta_ * h);
+  const double aPerVdot = (1.0 - alphaF_) / (1.0 - alphaM_);
+
+  // Predictor with vdot_{n+1} = vdot_n.
+  IntegratorState trial = s;
+  trial.t = s.t + h;
+  trial.a = (s.vdot - alphaM_ * s.a) / (1.0 - alphaM_);
+  trial.v = s.v + h * (1.0 - gamma_) * s.a + h * gamma_ * trial.a;
+  VectorXd hDeltaQ = h * s.v + h * h * (0.5 - beta_) * s.a + h * h * beta_ * trial.a;
+  trial.q = s.q;
+  system.retract(trial.q, hDeltaQ);
+
+  VectorXd r, phi, rhs(n + m);
+  double previous = 0.0;
+  for (int k = 0; k < options_.maxIterations; ++k) {
+    system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, r, phi);
+    if (!allFinite(r) || !allFinite(phi)) {
+      why = "residual is not finite";
+      return false;
+    }
+    const bool fresh = factoredStep_ != h;
+    if (fresh) {
+      if (!factorize(system, trial, h)) {
+        why = "singular iteration matrix";
+        return false;
+      }
+      ++s.factorizations;
+    }
+    rhs << -r / betaPrime, -phi;
+    const VectorXd delta = solver_.solve(rhs);
+    ++s.newtonIterations;
+    const double size = delta.head(n).cwiseAbs().maxCoeff();
+    if (!std::isfinite(size)) {
+      why = "Newton correction is not finite";
+      return false;
+    }
+    hDeltaQ += delta.head(n);
+    trial.q = s.q;
+    system.retract(trial.q, hDeltaQ);
+    trial.v += gammaPrime * delta.head(n);
+    trial.vdot += betaPrime * delta.head(n);
+    trial.a += aPerVdot * betaPrime * delta.head(n);
+    trial.lambda += betaPrime * delta.tail(m);
+    if (size <= options_.tolerance) {
+      trial.substeps = s.substeps + 1;
+      trial.newtonIterations = s.newtonIterations;
+      trial.factorizations = s.factorizations;
+      trial.rejectedSubsteps = s.rejectedSubsteps;
+      s = std::move(trial);
+      return true;
+    }
+    // Modified Newton: a stale iteration matrix is refreshed when the
+    // contraction slows; a fresh one that does not contract has failed.
+    if (k > 0 && size > 0.25 * previous) {
+      if (fresh && size > previous) {
+        std::ostringstream msg;
+        msg << "Newton diverging (correction " << size << " after " << previous << ")";
+        why = msg.str();
+        factoredStep_ = 0.0;
+        return false;
+      }
+      factoredStep_ = 0.0;  // refactorise at the next iteration
+    }
+    previous = size;
+  }
+  std::ostringstream msg;
+  msg << "Newton did not converge in " << options_.maxIterations << " iterations";
+  why = msg.str();
+  factoredStep_ = 0.0;
+  return false;
+}
+
+AdvanceResult GeneralizedAlpha::advance(Dynamics& system, IntegratorState& s, double tEnd) {
+  AdvanceResult result;
+  // A fresh iteration matrix at every communication point: a run restored
+  // from a saved state then replays the original bit for bit.
+  factoredStep_ = 0.0;
+  double h = std::min(s.h > 0.0 ? s.h : options_.hMax, options_.hMax);
+  int successes = 0;
+  while (tEnd - s.t > 1e-12 * std::max(1.0, std::abs(tEnd))) {
+    const double remaining = tEnd - s.t;
+    // Take the rest in one substep when it fits (within round-off), else h.
+    const double step = remaining <= h * (1.0 + 1e-9) ? remaining : h;
+    std::string why;
+    if (substep(system, s, step, why)) {
+      if (++successes >= 2 && h < options_.hMax) {
+        h = std::min(2.0 * h, options_.hMax);
+        successes = 0;
+      }
+      continue;
+    }
+    ++s.rejectedSubsteps;
+    successes = 0;
+    h = 0.5 * step;
+    if (h < options_.hMin) {
+      std::ostringstream msg;
+      msg << "substep failed at t = " << s.t << " with h = " << step << " (h_min = " << options_.hMin
+          << "): " << why;
+      result.ok = false;
+      result.reachedTime = s.t;
+      result.message = msg.str();
+      return result;
+    }
+  }
+  s.t = tEnd;
+  s.h = h;
+  result.reachedTime = tEnd;
+  return result;
+}
+
+}  // namespace mfbd

@@ -1,0 +1,62 @@
+#include "integrator/linear_solver.hpp"
+
+#include <Eigen/Dense>
+#include <Eigen/KLUSupport>
+
+namespace mfbd {
+
+struct LinearSolver::Impl {
+  bool sparse = false;
+  Eigen::PartialPivLU<Eigen::MatrixXd> dense;
+  // KLU holds raw SuiteSparse handles and cannot be copied; a copy of the
+  // solver (state saving) re-analyses lazily.
+  std::unique_ptr<Eigen::KLU<SparseMatrix>> klu;
+  bool analyzed = false;
+};
+
+LinearSolver::LinearSolver() : impl_(std::make_unique<Impl>()) {}
+LinearSolver::~LinearSolver() = default;
+LinearSolver::LinearSolver(const LinearSolver& other) : impl_(std::make_unique<Impl>()) {
+  impl_->sparse = other.impl_->sparse;
+  impl_->dense = other.impl_->dense;
+}
+LinearSolver& LinearSolver::operator=(const LinearSolver& other) {
+  if (this != &other) {
+    impl_ = std::make_unique<Impl>();
+    impl_->sparse = other.impl_->sparse;
+    impl_->dense = other.impl_->dense;
+  }
+  return *this;
+}
+
+bool LinearSolver::usesSparse() const { return impl_->sparse; }
+
+void LinearSolver::analyzePattern(const SparseMatrix& A) {
+  impl_->sparse = A.rows() > kDenseThreshold;
+  if (!impl_->sparse) return;
+  impl_->klu = std::make_unique<Eigen::KLU<SparseMatrix>>();
+  impl_->klu->analyzePattern(A);
+  impl_->analyzed = true;
+}
+
+LinearSolver::Status LinearSolver::factorize(const SparseMatrix& A) {
+  if (impl_->sparse) {
+    if (!impl_->analyzed) analyzePattern(A);
+    impl_->klu->factorize(A);
+    return impl_->klu->info() == Eigen::Success ? Status::Ok : Status::Singular;
+  }
+  const Eigen::MatrixXd dense(A);
+  impl_->dense.compute(dense);
+  // PartialPivLU does not report singularity: judge by the pivots.
+  const Eigen::VectorXd pivots = impl_->dense.matrixLU().diagonal().cwiseAbs();
+  const double scale = dense.cwiseAbs().maxCoeff();
+  if (!(pivots.minCoeff() > 1e-14 * scale)) return Status::Singular;
+  return Status::Ok;
+}
+
+Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) const {
+  if (impl_->sparse) return impl_->klu->solve(b);
+  return impl_->dense.solve(b);
+}
+
+}  // namespace mfbd

@@ -1,0 +1,147 @@
+// Scene -> Model: order bodies along the spanning tree from ground, place
+// every joint's markers from its design-configuration frame, and lay out the
+// coordinates (scalars, stored rotations) and velocities.
+#include <deque>
+#include <map>
+
+#include "model/model.hpp"
+#include "scene/joint_dofs.hpp"
+
+namespace mfbd {
+
+namespace {
+
+// Frame of a joint in the design configuration: origin at its position, z
+// along its axis.
+struct WorldFrame {
+  Vec3 origin;
+  Mat3 orientation;
+};
+
+Marker markerOn(int body, const WorldFrame& bodyFrame, const WorldFrame& jointFrame) {
+  Marker m;
+  m.body = body;
+  m.position = bodyFrame.orientation.transpose() * (jointFrame.origin - bodyFrame.origin);
+  m.orientation = bodyFrame.orientation.transpose() * jointFrame.orientation;
+  return m;
+}
+
+// Bodies in breadth-first order from ground along tree joints: parent < child.
+std::vector<int> treeOrder(const Scene& scene, std::map<std::string, int>& sceneBodyIndex) {
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) sceneBodyIndex[scene.bodies[i].name] = int(i);
+  std::vector<int> order;
+  std::deque<std::string> open = {kGround};
+  while (!open.empty()) {
+    const std::string at = open.front();
+    open.pop_front();
+    for (const JointSpec& j : scene.joints) {
+      if (j.cut || j.parent != at) continue;
+      order.push_back(sceneBodyIndex.at(j.child));
+      open.push_back(j.child);
+    }
+  }
+  return order;
+}
+
+void layOutCoordinates(Model& model, Joint& joint, const JointSpec& spec) {
+  const bool storedRotation = spec.type == JointType::Spherical || spec.type == JointType::Free;
+  const int scalarCount = joint.dofs - (storedRotation ? 3 : 0);
+  joint.velocityOffset = model.velocityCount;
+  VectorXd& x = model.initialConfiguration.scalars;
+  std::vector<double> q0 = spec.initialCoordinates;
+  q0.resize(joint.dofs, 0.0);
+  if (scalarCount > 0) {
+    joint.scalarOffset = int(x.size());
+    x.conservativeResize(x.size() + scalarCount);
+    for (int i = 0; i < scalarCount; ++i) x[joint.scalarOffset + i] = q0[i];
+    model.blocks.push_back({joint.velocityOffset, scalarCount, joint.scalarOffset, -1});
+  }
+  if (storedRotation) {
+    // Initial rotation given as a rotation vector, the last three coordinates.
+    joint.rotation = int(model.initialConfiguration.rotations.size());
+    model.initialConfiguration.rotations.push_back(expSO3(Vec3(q0[scalarCount], q0[scalarCount + 1], q0[scalarCount + 2])));
+    model.blocks.push_back({joint.velocityOffset + scalarCount, 3, -1, joint.rotation});
+  }
+  VectorXd& v = model.initialVelocity;
+  v.conservativeResize(v.size() + joint.dofs);
+  for (int i = 0; i < joint.dofs; ++i) v[joint.velocityOffset + i] = spec.initialRates.empty() ? 0.0 : spec.initialRates[i];
+  model.velocityCount += joint.dofs;
+  if (joint.actuated) {
+    joint.inputOffset = model.jointInputCount;
+    model.jointInputCount += joint.dofs;
+  }
+}
+
+}  // namespace
+
+Model assemble(const Scene& scene) {
+  Model model;
+  model.name = scene.name;
+  model.gravity = scene.gravity;
+  model.solver = scene.solver;
+
+  std::map<std::string, int> sceneBodyIndex;
+  const std::vector<int> order = treeOrder(scene, sceneBodyIndex);
+  std::map<std::string, int> bodyIndex;  // name -> model index
+  std::vector<WorldFrame> design;        // solver (centre-of-mass) frames in the design configuration
+  for (int k = 0; k < int(order.size()); ++k) {
+    const BodySpec& spec = scene.bodies[order[k]];
+    Body b;
+    b.name = spec.name;
+    b.mass = spec.mass;
+    b.inertia = spec.inertia;
+    b.centerOfMass = spec.centerOfMass;
+    bodyIndex[spec.name] = k;
+    design.push_back({spec.position + spec.orientation * spec.centerOfMass, spec.orientation});
+    model.bodies.push_back(b);
+  }
+  const WorldFrame groundFrame{Vec3::Zero(), Mat3::Identity()};
+  auto indexOf = [&](const std::string& name) { return name == kGround ? kGroundIndex : bodyIndex.at(name); };
+  auto frameOf = [&](int body) { return body == kGroundIndex ? groundFrame : design[body]; };
+
+  // Tree joints in body order (so joint k's child is body k), cut joints after.
+  std::vector<int> jointOrder(order.size(), -1);
+  std::vector<int> cutJoints;
+  for (int i = 0; i < int(scene.joints.size()); ++i) {
+    if (scene.joints[i].cut) cutJoints.push_back(i);
+    else jointOrder[bodyIndex.at(scene.joints[i].child)] = i;
+  }
+  for (int i : cutJoints) {
+    (void)i;
+    throw SceneError("joints[" + std::to_string(i) + "].cut",
+                     "joint '" + scene.joints[i].name + "': cut joints (closed loops) are not implemented yet");
+  }
+  for (int sceneIndex : jointOrder) {
+    const JointSpec& spec = scene.joints[sceneIndex];
+    Joint j;
+    j.name = spec.name;
+    j.type = spec.type;
+    j.dofs = int(jointDofs(spec.type));
+    j.cut = spec.cut;
+    j.actuated = spec.torqueInput;
+    j.damping = spec.damping;
+    const WorldFrame jointFrame{spec.position, frameFromZAxis(spec.axis)};
+    const int parent = indexOf(spec.parent), child = indexOf(spec.child);
+    j.parentMarker = markerOn(parent, frameOf(parent), jointFrame);
+    j.childMarker = markerOn(child, frameOf(child), jointFrame);
+    layOutCoordinates(model, j, spec);
+    model.bodies[child].parent = parent;
+    model.bodies[child].inboardJoint = int(model.joints.size());
+    model.joints.push_back(j);
+  }
+  return model;
+}
+
+int findBody(const Model& model, const std::string& name) {
+  for (int i = 0; i < int(model.bodies.size()); ++i)
+    if (model.bodies[i].name == name) return i;
+  return -1;
+}
+
+int findJoint(const Model& model, const std::string& name) {
+  for (int i = 0; i < int(model.joints.size()); ++i)
+    if (model.joints[i].name == name) return i;
+  return -1;
+}
+
+}  // namespace mfbd

@@ -1,0 +1,33 @@
+// The configuration manifold the integrator works on: a vector of scalar
+// coordinates (joint angles and slides, node positions) and a list of stored
+// rotations (spherical/free joints, flexible nodes). Velocities live in the
+// tangent space; a rotation's velocity is its body-frame angular velocity.
+#pragma once
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "math/rotation.hpp"
+
+namespace mfbd {
+
+using Eigen::VectorXd;
+
+struct Configuration {
+  VectorXd scalars;
+  std::vector<Mat3> rotations;
+};
+
+// Where the velocity coordinates v[offset .. offset+size) act: on scalars
+// (added) or on one stored rotation (R <- R expSO3(dv), size 3).
+struct CoordinateBlock {
+  int velocityOffset = 0;
+  int size = 0;
+  int scalarOffset = -1;  // scalar block
+  int rotation = -1;      // rotation block
+};
+
+// q <- q o exp(dq): the exact exponential map on each rotation block.
+void retract(const std::vector<CoordinateBlock>& blocks, Configuration& q, const VectorXd& dq);
+
+}  // namespace mfbd

@@ -1,0 +1,70 @@
+// Model: everything constant after assembly (topology, inertias, joint
+// frames, index offsets), as in Pinocchio. Data (data.hpp) holds all
+// workspace. Bodies are numbered so that parent[i] < i: recursions over the
+// tree are plain forward (positions, velocities) and backward (forces) loops.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "model/configuration.hpp"
+#include "scene/scene.hpp"
+
+namespace mfbd {
+
+inline constexpr int kGroundIndex = -1;
+
+// A frame fixed in a body: origin and orientation in the body frame. Joints
+// and force elements are written against markers only (DESIGN.md 2).
+struct Marker {
+  int body = kGroundIndex;
+  Vec3 position = Vec3::Zero();
+  Mat3 orientation = Mat3::Identity();
+};
+
+// A rigid body. Its solver frame sits at the centre of mass, axes parallel
+// to the user's body frame, so the body mass matrix is diag(m I, J).
+struct Body {
+  std::string name;
+  double mass = 0.0;
+  Mat3 inertia = Mat3::Zero();         // about the centre of mass, body axes
+  Vec3 centerOfMass = Vec3::Zero();    // user body frame origin -> centre of mass, body axes
+  int parent = kGroundIndex;           // parent body, < own index
+  int inboardJoint = -1;               // the tree joint whose child this body is
+};
+
+struct Joint {
+  std::string name;
+  JointType type = JointType::Revolute;
+  Marker parentMarker;  // on the parent body (or ground)
+  Marker childMarker;   // on the child body
+  int dofs = 0;
+  int velocityOffset = 0;  // into v
+  int scalarOffset = -1;   // its scalar coordinates in Configuration::scalars
+  int rotation = -1;       // its stored rotation in Configuration::rotations
+  bool cut = false;
+  bool actuated = false;   // generalized force input along its DOFs
+  int inputOffset = -1;    // into the joint-force input vector
+  double damping = 0.0;    // tunable
+};
+
+struct Model {
+  std::string name;
+  std::vector<Body> bodies;     // topological order
+  std::vector<Joint> joints;    // tree joints (joints[bodies[i].inboardJoint]) and cut joints
+  Vec3 gravity = Vec3::Zero();
+  SolverOptions solver;
+  std::vector<CoordinateBlock> blocks;  // the configuration manifold
+  int velocityCount = 0;
+  int jointInputCount = 0;
+  Configuration initialConfiguration;
+  VectorXd initialVelocity;
+};
+
+// Builds the Model of a validated scene. Throws SceneError for what the
+// solver cannot (yet) do with an otherwise valid scene.
+Model assemble(const Scene& scene);
+
+int findBody(const Model& model, const std::string& name);   // -1 if absent
+int findJoint(const Model& model, const std::string& name);  // -1 if absent
+
+}  // namespace mfbd

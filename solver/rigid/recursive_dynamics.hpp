@@ -1,0 +1,34 @@
+// The recursive formulation in joint coordinates (DESIGN.md 3):
+// a forward loop over the tree for poses, velocities Y = B qdot and
+// accelerations Ydot = B qddot + Bdot qdot, and a backward loop that
+// accumulates each subtree's Newton-Euler wrench, which gives both the
+// joint-space equations F = B^T (M Ydot - Q) - tau and the joint reactions.
+// Cartesian quantities are world-frame, at each body's centre of mass; the
+// paper's body-frame Y differs by the block rotation diag(A^T, A^T), which
+// leaves B^T M B and B^T Q unchanged.
+#pragma once
+#include "model/data.hpp"
+
+namespace mfbd {
+
+// Poses, velocities, accelerations and motion subspaces of every body.
+void forwardKinematics(const Model& model, Data& data, const Configuration& q, const VectorXd& v,
+                       const VectorXd& vdot);
+
+// B from the motion subspaces (after forwardKinematics).
+void computeVelocityTransformation(const Model& model, Data& data);
+
+// Backward loop: subtree wrenches and the joint-space residual
+// F_j = S_j^T W_j - tau_j (tau: generalized joint forces), after
+// forwardKinematics and with data.applied* filled.
+void backwardNewtonEuler(const Model& model, Data& data, const VectorXd& jointForces, VectorXd& residual);
+
+// Joint-space mass matrix B^T M B (after computeVelocityTransformation).
+Eigen::MatrixXd jointSpaceMassMatrix(const Model& model, const Data& data);
+
+// Force and torque that joint k's parent exerts on its child, expressed in the
+// child marker frame, torque about the child marker origin (after the
+// backward loop).
+void jointReaction(const Model& model, const Data& data, int joint, Vec3& force, Vec3& torque);
+
+}  // namespace mfbd

@@ -1,0 +1,371 @@
+// Scene JSON -> Scene, strictly: every key known, every number finite, every
+// reference resolved, every physical quantity possible. One error, naming the
+// JSON path and what was expected.
+#include <Eigen/Eigenvalues>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "scene/expression.hpp"
+#include "scene/scene.hpp"
+
+namespace mfbd {
+
+SceneError::SceneError(const std::string& path, const std::string& message)
+    : std::runtime_error((path.empty() ? std::string("scene") : path) + ": " + message), path_(path) {}
+
+const char* jointTypeName(JointType type) {
+  switch (type) {
+    case JointType::Revolute: return "revolute";
+    case JointType::Prismatic: return "prismatic";
+    case JointType::Cylindrical: return "cylindrical";
+    case JointType::Universal: return "universal";
+    case JointType::Spherical: return "spherical";
+    case JointType::Planar: return "planar";
+    case JointType::Fixed: return "fixed";
+    case JointType::Free: return "free";
+  }
+  return "?";
+}
+
+namespace {
+
+using json = nlohmann::json;
+
+std::string typeName(const json& j) {
+  if (j.is_null()) return "null";
+  if (j.is_boolean()) return "a boolean";
+  if (j.is_number()) return "a number";
+  if (j.is_string()) return "a string";
+  if (j.is_array()) return "an array";
+  return "an object";
+}
+
+// A JSON object together with its path, for reading fields with checks.
+class Field {
+ public:
+  Field(const json& value, std::string path, const std::map<std::string, double>& params)
+      : j_(value), path_(std::move(path)), params_(params) {}
+
+  const json& raw() const { return j_; }
+  const std::string& path() const { return path_; }
+  [[noreturn]] void fail(const std::string& message) const { throw SceneError(path_, message); }
+
+  Field at(const std::string& key) const {
+    return Field(j_.at(key), path_.empty() ? key : path_ + "." + key, params_);
+  }
+  Field at(std::size_t i) const { return Field(j_.at(i), path_ + "[" + std::to_string(i) + "]", params_); }
+  bool has(const std::string& key) const { return j_.contains(key); }
+
+  // This must be an object with only `allowed` keys and all `required` ones.
+  void expectObject(const std::set<std::string>& allowed, const std::set<std::string>& required) const {
+    if (!j_.is_object()) fail("expected an object, got " + typeName(j_));
+    for (const auto& item : j_.items()) {
+      if (!allowed.count(item.key())) {
+        std::string list;
+        for (const auto& k : allowed) list += (list.empty() ? "" : ", ") + k;
+        throw SceneError(path_.empty() ? item.key() : path_ + "." + item.key(),
+                         "unknown key; expected one of: " + list);
+      }
+    }
+    for (const auto& key : required)
+      if (!j_.contains(key))
+        throw SceneError(path_.empty() ? key : path_ + "." + key, "missing required field");
+  }
+
+  std::size_t arraySize() const {
+    if (!j_.is_array()) fail("expected an array, got " + typeName(j_));
+    return j_.size();
+  }
+
+  std::string string() const {
+    if (!j_.is_string()) fail("expected a string, got " + typeName(j_));
+    return j_.get<std::string>();
+  }
+
+  std::string identifier() const {
+    const std::string s = string();
+    bool ok = !s.empty() && (std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_');
+    for (char c : s) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_');
+    if (!ok) fail("expected a name of letters, digits and '_' not starting with a digit, got \"" + s + "\"");
+    return s;
+  }
+
+  bool boolean() const {
+    if (!j_.is_boolean()) fail("expected true or false, got " + typeName(j_));
+    return j_.get<bool>();
+  }
+
+  // A number or an expression over user parameters; always finite.
+  double number() const {
+    double value;
+    if (j_.is_number()) {
+      value = j_.get<double>();
+    } else if (j_.is_string()) {
+      try {
+        value = evaluateExpression(j_.get<std::string>(), params_);
+      } catch (const std::invalid_argument& e) {
+        fail(e.what());
+      }
+    } else {
+      fail("expected a number or a parameter expression, got " + typeName(j_));
+    }
+    if (!std::isfinite(value)) fail("expected a finite number, got " + std::to_string(value));
+    return value;
+  }
+
+  int integer() const {
+    if (!j_.is_number_integer()) fail("expected an integer, got " + typeName(j_));
+    return j_.get<int>();
+  }
+
+  std::vector<double> numbers() const {
+    std::vector<double> out(arraySize());
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = at(i).number();
+    return out;
+  }
+
+  Vec3 vec3() const {
+    if (arraySize() != 3) fail("expected 3 numbers, got " + std::to_string(j_.size()));
+    return Vec3(at(0).number(), at(1).number(), at(2).number());
+  }
+
+  Vec3 direction() const {
+    const Vec3 v = vec3();
+    if (v.norm() < 1e-12) fail("expected a non-zero direction, got a zero-length vector");
+    return v.normalized();
+  }
+
+  double positive() const {
+    const double v = number();
+    if (!(v > 0.0)) fail("expected a positive number, got " + std::to_string(v));
+    return v;
+  }
+
+  double nonNegative() const {
+    const double v = number();
+    if (v < 0.0) fail("expected a number >= 0, got " + std::to_string(v));
+    return v;
+  }
+
+ private:
+  const json& j_;
+  std::string path_;
+  const std::map<std::string, double>& params_;
+};
+
+std::vector<ParameterSpec> parseParameters(const Field& f, const std::map<std::string, double>& overrides,
+                                           std::map<std::string, double>& values) {
+  std::vector<ParameterSpec> out;
+  if (!f.raw().is_object()) f.fail("expected an object of parameters, got " + typeName(f.raw()));
+  for (const auto& item : f.raw().items()) {
+    const Field p = f.at(item.key());
+    ParameterSpec spec;
+    spec.name = Field(json(item.key()), p.path(), values).identifier();
+    const std::map<std::string, double> none;  // parameter values are plain numbers
+    if (p.raw().is_object()) {
+      p.expectObject({"value", "unit", "description"}, {"value"});
+      spec.value = Field(p.raw().at("value"), p.path() + ".value", none).number();
+      if (p.has("unit")) spec.unit = p.at("unit").string();
+      if (p.has("description")) spec.description = p.at("description").string();
+    } else {
+      spec.value = Field(p.raw(), p.path(), none).number();
+    }
+    if (const auto it = overrides.find(spec.name); it != overrides.end()) {
+      if (!std::isfinite(it->second)) p.fail("expected a finite value, got " + std::to_string(it->second));
+      spec.value = it->second;
+    }
+    values[spec.name] = spec.value;
+    out.push_back(spec);
+  }
+  for (const auto& item : overrides)
+    if (!values.count(item.first)) throw SceneError("parameters." + item.first, "no such parameter in the scene");
+  return out;
+}
+
+Mat3 parseOrientation(const Field& f) {
+  f.expectObject({"quaternion", "z_axis", "x_axis", "rotation_vector"}, {});
+  const int given = f.has("quaternion") + f.has("z_axis") + f.has("rotation_vector");
+  if (given != 1) f.fail("expected exactly one of quaternion [w,x,y,z], z_axis (+ x_axis), rotation_vector");
+  if (f.has("x_axis") && !f.has("z_axis")) f.at("x_axis").fail("x_axis goes with z_axis");
+  if (f.has("quaternion")) {
+    const Field q = f.at("quaternion");
+    const std::vector<double> v = q.numbers();
+    if (v.size() != 4) q.fail("expected 4 numbers [w, x, y, z], got " + std::to_string(v.size()));
+    Quat quat(v[0], v[1], v[2], v[3]);
+    if (quat.norm() < 1e-12) q.fail("expected a non-zero quaternion");
+    return quat.normalized().toRotationMatrix();
+  }
+  if (f.has("rotation_vector")) return expSO3(f.at("rotation_vector").vec3());
+  const Vec3 z = f.at("z_axis").direction();
+  if (!f.has("x_axis")) return frameFromZAxis(z);
+  const Vec3 xRaw = f.at("x_axis").direction();
+  const Vec3 x = xRaw - xRaw.dot(z) * z;
+  if (x.norm() < 1e-6) f.at("x_axis").fail("expected a direction not parallel to z_axis");
+  Mat3 A;
+  A.col(0) = x.normalized();
+  A.col(2) = z;
+  A.col(1) = z.cross(A.col(0));
+  return A;
+}
+
+// An inertia tensor that a body can have: symmetric, principal moments >= 0
+// and each no larger than the sum of the other two.
+Mat3 parseInertia(const Field& f) {
+  const std::vector<double> v = f.numbers();
+  Mat3 J = Mat3::Zero();
+  if (v.size() == 3) {
+    J.diagonal() << v[0], v[1], v[2];
+  } else if (v.size() == 6) {
+    J << v[0], v[3], v[4], v[3], v[1], v[5], v[4], v[5], v[2];
+  } else {
+    f.fail("expected [Ixx, Iyy, Izz] or [Ixx, Iyy, Izz, Ixy, Ixz, Iyz], got " + std::to_string(v.size()) + " numbers");
+  }
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(J);
+  const Vec3 p = eig.eigenvalues();
+  const double scale = std::max(1.0, p.cwiseAbs().maxCoeff());
+  if (p.minCoeff() < -1e-12 * scale) {
+    std::ostringstream s;
+    s << "expected an inertia tensor with principal moments >= 0, got " << p.transpose();
+    f.fail(s.str());
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (p[i] > p[(i + 1) % 3] + p[(i + 2) % 3] + 1e-12 * scale) {
+      std::ostringstream s;
+      s << "principal moments " << p.transpose()
+        << " break the triangle inequality (each must be <= the sum of the other two)";
+      f.fail(s.str());
+    }
+  }
+  return J;
+}
+
+BodySpec parseBody(const Field& f) {
+  f.expectObject({"name", "mass", "inertia", "center_of_mass", "position", "orientation"},
+                 {"name", "mass", "inertia", "position"});
+  BodySpec b;
+  b.name = f.at("name").identifier();
+  b.mass = f.at("mass").positive();
+  b.inertia = parseInertia(f.at("inertia"));
+  if (f.has("center_of_mass")) b.centerOfMass = f.at("center_of_mass").vec3();
+  b.position = f.at("position").vec3();
+  if (f.has("orientation")) b.orientation = parseOrientation(f.at("orientation"));
+  return b;
+}
+
+JointType parseJointType(const Field& f) {
+  const std::string s = f.string();
+  for (JointType t : {JointType::Revolute, JointType::Prismatic, JointType::Cylindrical, JointType::Universal,
+                      JointType::Spherical, JointType::Planar, JointType::Fixed, JointType::Free})
+    if (s == jointTypeName(t)) return t;
+  f.fail("unknown joint type \"" + s +
+         "\"; expected revolute, prismatic, cylindrical, universal, spherical, planar, fixed or free");
+}
+
+JointSpec parseJoint(const Field& f) {
+  f.expectObject({"name", "type", "parent", "child", "position", "axis", "cut", "initial", "damping", "actuated"},
+                 {"name", "type", "parent", "child", "position"});
+  JointSpec jt;
+  jt.name = f.at("name").identifier();
+  jt.type = parseJointType(f.at("type"));
+  jt.parent = f.at("parent").identifier();
+  jt.child = f.at("child").identifier();
+  jt.position = f.at("position").vec3();
+  if (f.has("axis")) jt.axis = f.at("axis").direction();
+  if (f.has("cut")) jt.cut = f.at("cut").boolean();
+  if (f.has("damping")) jt.damping = f.at("damping").nonNegative();
+  if (f.has("actuated")) jt.torqueInput = f.at("actuated").boolean();
+  if (f.has("initial")) {
+    const Field init = f.at("initial");
+    init.expectObject({"coordinates", "rates"}, {});
+    if (init.has("coordinates")) jt.initialCoordinates = init.at("coordinates").numbers();
+    if (init.has("rates")) jt.initialRates = init.at("rates").numbers();
+  }
+  return jt;
+}
+
+SolverOptions parseSolver(const Field& f) {
+  f.expectObject({"h_max", "h_min", "rho_inf", "tolerance", "max_iterations"}, {});
+  SolverOptions s;
+  if (f.has("h_max")) s.hMax = f.at("h_max").positive();
+  if (f.has("h_min")) s.hMin = f.at("h_min").positive();
+  if (s.hMin > s.hMax) f.at("h_min").fail("expected h_min <= h_max");
+  if (f.has("rho_inf")) {
+    s.rhoInf = f.at("rho_inf").number();
+    if (s.rhoInf < 0.0 || s.rhoInf > 1.0) f.at("rho_inf").fail("expected a spectral radius in [0, 1]");
+  }
+  if (f.has("tolerance")) s.tolerance = f.at("tolerance").positive();
+  if (f.has("max_iterations")) {
+    s.maxIterations = f.at("max_iterations").integer();
+    if (s.maxIterations < 1 || s.maxIterations > 100) f.at("max_iterations").fail("expected 1 to 100");
+  }
+  return s;
+}
+
+Experiment parseExperiment(const Field& f) {
+  f.expectObject({"start_time", "stop_time", "output_interval"}, {});
+  Experiment e;
+  if (f.has("start_time")) e.startTime = f.at("start_time").number();
+  if (f.has("stop_time")) e.stopTime = f.at("stop_time").number();
+  if (e.stopTime <= e.startTime) f.at("stop_time").fail("expected stop_time > start_time");
+  if (f.has("output_interval")) e.outputInterval = f.at("output_interval").positive();
+  return e;
+}
+
+void parseSelection(const Field& f, bool& all, std::vector<std::string>& names) {
+  if (f.raw().is_string()) {
+    if (f.string() != "all") f.fail("expected \"all\" or a list of names");
+    all = true;
+    return;
+  }
+  all = false;
+  for (std::size_t i = 0; i < f.arraySize(); ++i) names.push_back(f.at(i).identifier());
+}
+
+}  // namespace
+
+void validateScene(const Scene& scene);  // topology.cpp
+
+Scene parseScene(const std::string& text, const std::map<std::string, double>& parameterValues) {
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw SceneError("", "empty file; expected a JSON object");
+  json doc;
+  try {
+    doc = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw SceneError("", std::string("not valid JSON: ") + e.what());
+  }
+  std::map<std::string, double> params;
+  const Field root(doc, "", params);
+  root.expectObject({"format", "name", "description", "parameters", "gravity", "solver", "experiment", "bodies",
+                     "joints", "outputs"},
+                    {"format", "name", "bodies", "joints"});
+  if (root.at("format").string() != "mfbd-scene/1")
+    root.at("format").fail("expected \"mfbd-scene/1\"");
+
+  Scene scene;
+  scene.name = root.at("name").identifier();
+  if (root.has("description")) scene.description = root.at("description").string();
+  if (root.has("parameters")) scene.parameters = parseParameters(root.at("parameters"), parameterValues, params);
+  else if (!parameterValues.empty())
+    throw SceneError("parameters." + parameterValues.begin()->first, "no such parameter in the scene");
+  if (root.has("gravity")) scene.gravity = root.at("gravity").vec3();
+  if (root.has("solver")) scene.solver = parseSolver(root.at("solver"));
+  if (root.has("experiment")) scene.experiment = parseExperiment(root.at("experiment"));
+  const Field bodies = root.at("bodies");
+  for (std::size_t i = 0; i < bodies.arraySize(); ++i) scene.bodies.push_back(parseBody(bodies.at(i)));
+  const Field joints = root.at("joints");
+  for (std::size_t i = 0; i < joints.arraySize(); ++i) scene.joints.push_back(parseJoint(joints.at(i)));
+  if (root.has("outputs")) {
+    const Field out = root.at("outputs");
+    out.expectObject({"bodies", "joints"}, {});
+    if (out.has("bodies")) parseSelection(out.at("bodies"), scene.outputs.allBodies, scene.outputs.bodies);
+    if (out.has("joints")) parseSelection(out.at("joints"), scene.outputs.allJoints, scene.outputs.joints);
+  }
+  validateScene(scene);
+  return scene;
+}
+
+}  // namespace mfbd

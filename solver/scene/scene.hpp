@@ -1,0 +1,108 @@
+// Scene: the plain, validated description of a mechanism, in SI units.
+// Produced by parseScene() from scene JSON (see README "Scene format" and
+// scene.schema.json); consumed by assemble() to build the Model.
+// No JSON types here: the rest of the solver never sees the file format.
+#pragma once
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "math/rotation.hpp"
+
+namespace mfbd {
+
+// A user parameter: a named number that scene fields may use in expressions
+// ("mass": "m", "position": ["L", 0, 0]). Exposed as an FMU parameter.
+struct ParameterSpec {
+  std::string name;
+  double value = 0.0;
+  std::string unit;
+  std::string description;
+};
+
+struct BodySpec {
+  std::string name;
+  double mass = 0.0;
+  Mat3 inertia = Mat3::Zero();  // about the centre of mass, body axes
+  Vec3 centerOfMass = Vec3::Zero();  // in the body frame
+  Vec3 position = Vec3::Zero();      // body frame origin, world, design configuration
+  Mat3 orientation = Mat3::Identity();  // body frame -> world, design configuration
+};
+
+enum class JointType { Revolute, Prismatic, Cylindrical, Universal, Spherical, Planar, Fixed, Free };
+
+const char* jointTypeName(JointType type);
+
+// A joint between two bodies, placed in the design configuration: its frame
+// is at `position` with z along `axis` (both world). Joint coordinates are
+// zero in the design configuration; `initialCoordinates` move away from it.
+struct JointSpec {
+  std::string name;
+  JointType type = JointType::Revolute;
+  std::string parent;  // body name or "ground"
+  std::string child;
+  Vec3 position = Vec3::Zero();
+  Vec3 axis = Vec3::UnitZ();
+  bool cut = false;  // closes a loop (Lagrange multipliers) instead of a tree joint
+  std::vector<double> initialCoordinates;  // size = joint DOF, or empty = zeros
+  std::vector<double> initialRates;
+  double damping = 0.0;    // viscous, per DOF, N m s/rad or N s/m
+  bool torqueInput = false;  // an FMI input acting along the joint's DOFs
+};
+
+struct SolverOptions {
+  double hMax = 1e-3;       // largest implicit substep, s
+  double hMin = 1e-9;       // smallest substep before a step is discarded, s
+  double rhoInf = 0.8;      // generalized-alpha spectral radius at infinity
+  double tolerance = 1e-10; // Newton: largest position increment (m, rad)
+  int maxIterations = 12;
+};
+
+// Which outputs the FMU exposes. Empty lists with `all` false expose none.
+struct OutputSelection {
+  bool allBodies = true;
+  std::vector<std::string> bodies;
+  bool allJoints = true;
+  std::vector<std::string> joints;
+};
+
+// The default experiment the FMU advertises (fmpy and others use it).
+struct Experiment {
+  double startTime = 0.0;
+  double stopTime = 1.0;
+  double outputInterval = 0.01;
+};
+
+struct Scene {
+  std::string name;
+  std::string description;
+  std::vector<ParameterSpec> parameters;
+  Vec3 gravity = Vec3::Zero();
+  SolverOptions solver;
+  Experiment experiment;
+  std::vector<BodySpec> bodies;
+  std::vector<JointSpec> joints;
+  OutputSelection outputs;
+};
+
+// One bad-input error: where (a JSON path such as "joints[1].axis") and what
+// was expected. what() reads "joints[1].axis: expected ...".
+class SceneError : public std::runtime_error {
+ public:
+  SceneError(const std::string& path, const std::string& message);
+  const std::string& path() const { return path_; }
+ private:
+  std::string path_;
+};
+
+// Parses and validates scene JSON text. `parameterValues` overrides the
+// defaults of user parameters (how FMU parameters reach the scene).
+// Throws SceneError naming the first bad field.
+Scene parseScene(const std::string& text,
+                 const std::map<std::string, double>& parameterValues = {});
+
+// The name that stands for the world in joint.parent / joint.child.
+inline constexpr const char* kGround = "ground";
+
+}  // namespace mfbd

@@ -1,0 +1,104 @@
+// Cross-field checks of a parsed scene: unique names, resolved references,
+// coordinate counts, and a spanning tree rooted at ground.
+#include <map>
+#include <set>
+
+#include "scene/joint_dofs.hpp"
+#include "scene/scene.hpp"
+
+namespace mfbd {
+
+namespace {
+
+std::string jointPath(std::size_t i) { return "joints[" + std::to_string(i) + "]"; }
+
+void checkNames(const Scene& scene) {
+  std::map<std::string, std::string> seen;  // name -> path of first use
+  const std::set<std::string> reserved = {kGround, "gravity", "solver", "time"};
+  auto claim = [&](const std::string& name, const std::string& path) {
+    if (reserved.count(name)) throw SceneError(path, "\"" + name + "\" is a reserved name");
+    const auto [it, fresh] = seen.emplace(name, path);
+    if (!fresh) throw SceneError(path, "duplicate name \"" + name + "\" (already used at " + it->second + ")");
+  };
+  for (std::size_t i = 0; i < scene.parameters.size(); ++i)
+    claim(scene.parameters[i].name, "parameters." + scene.parameters[i].name);
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i)
+    claim(scene.bodies[i].name, "bodies[" + std::to_string(i) + "].name");
+  for (std::size_t i = 0; i < scene.joints.size(); ++i) claim(scene.joints[i].name, jointPath(i) + ".name");
+}
+
+void checkJoint(const Scene& scene, std::size_t i, const std::set<std::string>& bodies) {
+  const JointSpec& j = scene.joints[i];
+  const std::string path = jointPath(i);
+  for (const auto* end : {&j.parent, &j.child}) {
+    const char* key = end == &j.parent ? ".parent" : ".child";
+    if (*end != kGround && !bodies.count(*end))
+      throw SceneError(path + key, "joint '" + j.name + "' names unknown body \"" + *end + "\"");
+  }
+  if (j.child == kGround) throw SceneError(path + ".child", "ground cannot be a joint's child; swap parent and child");
+  if (j.parent == j.child) throw SceneError(path + ".child", "joint '" + j.name + "' connects a body to itself");
+  const std::size_t n = jointDofs(j.type);
+  if (!j.initialCoordinates.empty() && j.initialCoordinates.size() != n)
+    throw SceneError(path + ".initial.coordinates", "a " + std::string(jointTypeName(j.type)) + " joint has " +
+                                                        std::to_string(n) + " coordinates, got " +
+                                                        std::to_string(j.initialCoordinates.size()));
+  if (!j.initialRates.empty() && j.initialRates.size() != n)
+    throw SceneError(path + ".initial.rates", "a " + std::string(jointTypeName(j.type)) + " joint has " +
+                                                  std::to_string(n) + " rates, got " +
+                                                  std::to_string(j.initialRates.size()));
+  if (j.torqueInput && n == 0)
+    throw SceneError(path + ".actuated", "a fixed joint has no coordinate to actuate");
+}
+
+// Every body is the child of exactly one tree (non-cut) joint, and following
+// parents from any body reaches ground.
+void checkTree(const Scene& scene) {
+  std::map<std::string, std::size_t> inboard;  // body -> index of its tree joint
+  for (std::size_t i = 0; i < scene.joints.size(); ++i) {
+    const JointSpec& j = scene.joints[i];
+    if (j.cut) continue;
+    const auto [it, fresh] = inboard.emplace(j.child, i);
+    if (!fresh)
+      throw SceneError(jointPath(i) + ".child",
+                       "body '" + j.child + "' has two parent joints, '" + scene.joints[it->second].name +
+                           "' and '" + j.name + "'; declare one of them \"cut\": true to close the loop");
+  }
+  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+    const std::string& name = scene.bodies[b].name;
+    if (!inboard.count(name))
+      throw SceneError("bodies[" + std::to_string(b) + "]",
+                       "body '" + name + "' has no joint to a parent; connect it (a \"free\" joint for a floating body)");
+    std::string at = name;
+    for (std::size_t steps = 0; at != kGround; ++steps) {
+      if (steps > scene.bodies.size())
+        throw SceneError("bodies[" + std::to_string(b) + "]",
+                         "body '" + name + "' is on a loop of parent joints that never reaches ground");
+      at = scene.joints[inboard.at(at)].parent;
+    }
+  }
+}
+
+void checkOutputs(const Scene& scene, const std::set<std::string>& bodies) {
+  std::set<std::string> joints;
+  for (const auto& j : scene.joints) joints.insert(j.name);
+  for (std::size_t i = 0; i < scene.outputs.bodies.size(); ++i)
+    if (!bodies.count(scene.outputs.bodies[i]))
+      throw SceneError("outputs.bodies[" + std::to_string(i) + "]", "unknown body \"" + scene.outputs.bodies[i] + "\"");
+  for (std::size_t i = 0; i < scene.outputs.joints.size(); ++i)
+    if (!joints.count(scene.outputs.joints[i]))
+      throw SceneError("outputs.joints[" + std::to_string(i) + "]", "unknown joint \"" + scene.outputs.joints[i] + "\"");
+}
+
+}  // namespace
+
+void validateScene(const Scene& scene) {
+  if (scene.bodies.empty()) throw SceneError("bodies", "expected at least one body");
+  checkNames(scene);
+  std::set<std::string> bodies;
+  for (const auto& b : scene.bodies) bodies.insert(b.name);
+  for (std::size_t i = 0; i < scene.joints.size(); ++i) checkJoint(scene, i, bodies);
+  checkTree(scene);
+  checkOutputs(scene, bodies);
+}
+
+}  // namespace mfbd

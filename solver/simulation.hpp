@@ -1,0 +1,70 @@
+// Simulation: the solver's facade for the FMU layer. One scene, its System,
+// the integrator and its state; quantities read and written by kind, so the
+// FMU layer needs no mechanics beyond this API and the variable table.
+#pragma once
+#include <memory>
+#include <string>
+
+#include "integrator/generalized_alpha.hpp"
+#include "system.hpp"
+
+namespace mfbd {
+
+enum class QuantityKind {
+  UserParameter,    // index: parameter                          (fixed)
+  Gravity,          // component 0..2                            (fixed)
+  StepSizeMax,      //                                           (fixed)
+  SpectralRadius,   //                                           (fixed)
+  JointDamping,     // index: joint                              (tunable)
+  JointForceInput,  // index: joint, component: DOF              (input)
+  JointCoordinate,  // index: joint, component: DOF              (output)
+  JointRate,
+  JointReactionForce,   // component 0..2, child marker frame
+  JointReactionTorque,  // about the child marker origin
+  BodyPosition,         // user body frame origin, world
+  BodyOrientation,      // quaternion w, x, y, z (body -> world)
+  BodyVelocity,
+  BodyAngularVelocity,
+};
+
+struct Quantity {
+  QuantityKind kind;
+  int index = 0;      // parameter, joint or body (model numbering for joints/bodies: by name at build)
+  int component = 0;
+};
+
+// A fixed parameter's value written into a scene before assembly.
+void setSceneParameter(Scene& scene, const Quantity& q, double value);
+double sceneParameter(const Scene& scene, const Quantity& q);
+
+class Simulation {
+ public:
+  explicit Simulation(const Scene& scene);  // throws SceneError
+
+  // Consistent initial accelerations at time t0; false with a message.
+  bool initialize(double t0, std::string& message);
+  // Advances to t + H; on failure keeps the state of the step start.
+  AdvanceResult doStep(double H);
+
+  double time() const { return state_.t; }
+  const IntegratorState& state() const { return state_; }
+  const System& system() const { return system_; }
+
+  double read(const Quantity& q);
+  // Inputs and tunable parameters; false if q is neither.
+  bool write(const Quantity& q, double value);
+
+ private:
+  void evaluateOutputs();
+
+  const Scene scene_;
+  System system_;
+  GeneralizedAlpha integrator_;
+  IntegratorState state_;
+  std::vector<int> bodyIndex_, jointIndex_;  // scene order -> model order
+  std::vector<Quat> orientation_;            // sign-continuous across steps, scene body order
+  bool outputsCurrent_ = false;
+  bool inputsChangedSinceStep_ = false;
+};
+
+}  // namespace mfbd
