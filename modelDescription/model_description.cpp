@@ -103,7 +103,8 @@ void writeVariables(std::ostream& x, const std::vector<Variable>& table) {
     x << "    <ScalarVariable name=\"" << escape(v.name) << "\" valueReference=\"" << v.valueReference
       << "\" causality=\"" << causalityName(v.causality) << "\" variability=\"" << variabilityName(v.variability)
       << "\"";
-    if (v.causality != Causality::Output) x << " initial=\"exact\"";
+    // Parameters are exact; inputs take a start value but no initial attribute.
+    if (v.causality == Causality::Parameter) x << " initial=\"exact\"";
     x << " description=\"" << escape(v.description) << "\">\n      <Real";
     if (!v.unit.empty()) x << " unit=\"" << escape(v.unit) << "\"";
     if (v.causality != Causality::Output) x << " start=\"" << number(v.start) << "\"";
