@@ -53,6 +53,7 @@ AdvanceResult Simulation::doStep(double H) {
   AdvanceResult result = integrator_.advance(system_, state_, state_.t + H);
   if (!result.ok) {
     state_ = std::move(start);
+    outputsCurrent_ = false;  // the workspace holds the failed trial, not the restored state
     return result;
   }
   inputsChangedSinceStep_ = false;
