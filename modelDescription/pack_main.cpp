@@ -21,6 +21,7 @@ namespace {
 
 const char* kUsage =
     "usage: mfbd-pack SCENE.json -o OUT.fmu [--binaries DIR]\n"
+    "       mfbd-pack --guid SCENE.json   (print the GUID an FMU of this scene gets)\n"
     "  --binaries DIR  folder with mfbd_fmu.so and the libraries it ships with\n"
     "                  (default: " MFBD_FMU_BINARY_DIR ")\n";
 
@@ -36,9 +37,11 @@ std::string readFile(const fs::path& p) {
 
 int main(int argc, char** argv) {
   std::string scenePath, outPath, binaries = MFBD_FMU_BINARY_DIR;
+  bool printGuid = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "-o" && i + 1 < argc) outPath = argv[++i];
+    else if (a == "--guid") printGuid = true;
     else if (a == "--binaries" && i + 1 < argc) binaries = argv[++i];
     else if (a == "-h" || a == "--help") {
       std::cout << kUsage;
@@ -49,12 +52,16 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (scenePath.empty() || outPath.empty()) {
+  if (scenePath.empty() || (outPath.empty() && !printGuid)) {
     std::cerr << kUsage;
     return 2;
   }
   try {
     const std::string text = readFile(scenePath);
+    if (printGuid) {
+      std::cout << mfbd::sceneGuid(text) << "\n";
+      return 0;
+    }
     mfbd::Scene scene;
     try {
       scene = mfbd::parseScene(text);

@@ -81,6 +81,8 @@ class Parser {
     double value = 0.0;
     try {
       value = std::stod(s_.substr(pos_), &used);
+    } catch (const std::out_of_range&) {
+      fail("number out of range");
     } catch (const std::exception&) {
       fail("bad number");
     }

@@ -106,7 +106,7 @@ class Field {
     } else if (j_.is_string()) {
       try {
         value = evaluateExpression(j_.get<std::string>(), params_);
-      } catch (const std::invalid_argument& e) {
+      } catch (const std::exception& e) {
         fail(e.what());
       }
     } else {
@@ -334,7 +334,7 @@ Scene parseScene(const std::string& text, const std::map<std::string, double>& p
   json doc;
   try {
     doc = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax errors, and numbers beyond double range
     throw SceneError("", std::string("not valid JSON: ") + e.what());
   }
   std::map<std::string, double> params;
