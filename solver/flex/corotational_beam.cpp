@@ -107,7 +107,9 @@ Kinematics corotatedFrame(const CorotationalBeam& beam, const NodePose& n1,
   k.q[1] = k.R[1].col(1);
   k.qMean = 0.5 * (k.q[0] + k.q[1]);
   const Vec3 n = k.e1.cross(k.qMean);
-  k.qy = n.norm();  // |q| <= 1; qy -> 0 only at ~90 deg local rotations
+  // |q| <= 1; qy -> 0 only at ~90 deg local bending of both nodes or a
+  // ~180 deg relative twist, far outside small local deformations.
+  k.qy = n.norm();
   if (!(k.qy > 1e-6)) return k;
   k.e3 = n / k.qy;
   k.e2 = k.e3.cross(k.e1);

@@ -1,0 +1,98 @@
+"""Every packed FMU: valid for fmpy (schema and semantics), self-contained
+(every NEEDED library is C/C++ runtime or ships inside), consistent GUID."""
+import pathlib
+import re
+import subprocess
+import zipfile
+
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.validation import validate_fmu
+
+from conftest import PACKER, example_fmus
+
+RUNTIME = re.compile(r"^(ld-linux-x86-64\.so\.2|libc\.so\.6|libm\.so\.6|libdl\.so\.2|librt\.so\.1|"
+                     r"libpthread\.so\.0|libstdc\+\+\.so\.6|libgcc_s\.so\.1)$")
+
+
+def dynamic_section(path):
+    out = subprocess.run(["readelf", "-d", str(path)], capture_output=True, text=True, check=True).stdout
+    needed = re.findall(r"\(NEEDED\)\s+Shared library: \[(.+?)\]", out)
+    runpath = re.findall(r"\((?:RUNPATH|RPATH)\)\s+Library (?:runpath|rpath): \[(.+?)\]", out)
+    return needed, runpath
+
+
+def test_there_are_example_fmus():
+    assert len(example_fmus()) >= 1
+
+
+@pytest.mark.parametrize("fmu", example_fmus(), ids=lambda p: p.name)
+def test_fmpy_validates(fmu):
+    assert validate_fmu(str(fmu)) == []
+
+
+@pytest.mark.parametrize("fmu", example_fmus(), ids=lambda p: p.name)
+def test_binary_is_self_contained(fmu, tmp_path):
+    extract(str(fmu), str(tmp_path))
+    md = read_model_description(str(fmu))
+    bindir = tmp_path / "binaries" / "linux64"
+    shipped = {p.name for p in bindir.iterdir()}
+    main = bindir / f"{md.coSimulation.modelIdentifier}.so"
+    assert main.name in shipped
+    for lib in bindir.iterdir():
+        needed, runpath = dynamic_section(lib)
+        for name in needed:
+            assert RUNTIME.match(name) or name in shipped, f"{lib.name} needs {name}, neither runtime nor shipped"
+        if any(not RUNTIME.match(n) for n in needed):
+            assert runpath == ["$ORIGIN"], f"{lib.name}: RUNPATH {runpath}"
+    # The loader resolves every non-runtime library inside the FMU.
+    ldd = subprocess.run(["ldd", str(main)], capture_output=True, text=True, check=True).stdout
+    for line in ldd.splitlines():
+        m = re.match(r"\s*(\S+) => (\S+)", line)
+        if m and not RUNTIME.match(m.group(1)):
+            assert pathlib.Path(m.group(2)).parent == bindir, line
+
+
+@pytest.mark.parametrize("fmu", example_fmus(), ids=lambda p: p.name)
+def test_guid_is_the_hash_of_the_shipped_scene(fmu, tmp_path):
+    with zipfile.ZipFile(fmu) as z:
+        (tmp_path / "scene.json").write_bytes(z.read("resources/scene.json"))
+    guid = subprocess.run([str(PACKER), "--guid", str(tmp_path / "scene.json")], capture_output=True, text=True,
+                          check=True).stdout.strip()
+    assert read_model_description(str(fmu)).guid == guid
+    # Any change of the scene changes the GUID.
+    (tmp_path / "scene.json").write_bytes(z_read(fmu).replace(b'"pendulum"', b'"pendulum2"'))
+    other = subprocess.run([str(PACKER), "--guid", str(tmp_path / "scene.json")], capture_output=True, text=True,
+                           check=True).stdout.strip()
+    assert other != guid
+
+
+def z_read(fmu):
+    with zipfile.ZipFile(fmu) as z:
+        return z.read("resources/scene.json") + b" "
+
+
+def test_model_description_declares_only_what_works(pendulum_fmu):
+    md = read_model_description(str(pendulum_fmu))
+    cs = md.coSimulation
+    assert cs.canHandleVariableCommunicationStepSize is True
+    assert cs.canNotUseMemoryManagementFunctions is True
+    assert cs.needsExecutionTool is False and cs.canBeInstantiatedOnlyOncePerProcess is False
+    # Not implemented yet, so declared false (their functions return fmi2Error).
+    assert cs.canGetAndSetFMUstate is False and cs.canSerializeFMUstate is False
+    assert cs.canInterpolateInputs is False and cs.providesDirectionalDerivative is False
+    assert cs.maxOutputDerivativeOrder == 0
+    assert md.variableNamingConvention == "structured"
+    names = {v.name: v for v in md.modelVariables}
+    assert names["hinge.torque"].causality == "input"
+    assert names["hinge.damping"].variability == "tunable"
+    assert names["length"].variability == "fixed" and names["mass"].variability == "fixed"
+    assert names["gravity.y"].variability == "fixed"
+    assert names["solver.h_max"].causality == "parameter" and names["solver.rho_inf"].causality == "parameter"
+    for n in ["hinge.angle", "hinge.angle_rate", "hinge.reaction_force.x", "hinge.reaction_torque.z",
+              "bob.position.x", "bob.orientation.w", "bob.velocity.y", "bob.angular_velocity.z"]:
+        assert names[n].causality == "output", n
+    # Reactions depend directly on the input torque; positions do not.
+    deps = {u.variable.name: [d.name for d in (u.dependencies or [])] for u in md.outputs}
+    assert deps["hinge.reaction_torque.z"] == ["hinge.torque"]
+    assert deps["bob.position.x"] == []
