@@ -106,8 +106,8 @@ Model assemble(const Scene& scene) {
     if (scene.joints[i].cut) cutJoints.push_back(i);
     else jointOrder[bodyIndex.at(scene.joints[i].child)] = i;
   }
-  for (int i : cutJoints) {
-    (void)i;
+  if (!cutJoints.empty()) {
+    const int i = cutJoints.front();
     throw SceneError("joints[" + std::to_string(i) + "].cut",
                      "joint '" + scene.joints[i].name + "': cut joints (closed loops) are not implemented yet");
   }
