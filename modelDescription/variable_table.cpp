@@ -86,6 +86,11 @@ std::vector<Variable> variableTable(const Scene& scene) {
           "viscous damping per joint DOF", {QK::JointDamping, j}, jt.damping);
   }
 
+  for (int b = 0; b < int(scene.flexibleBodies.size()); ++b)
+    t.add(scene.flexibleBodies[b].name + ".damping", P, Variability::Tunable, "s",
+          "stiffness-proportional material damping coefficient", {QK::FlexibleDamping, b},
+          scene.flexibleBodies[b].damping);
+
   // Inputs: generalized joint forces along the DOFs of actuated joints.
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
@@ -100,7 +105,34 @@ std::vector<Variable> variableTable(const Scene& scene) {
     }
   }
 
-  // Outputs: joints, then bodies, as the scene selects.
+  // Flexible inputs, named by body and node, at the offsets the assembly gave.
+  const Model model = assemble(scene);
+  const FlexibleMesh& mesh = model.flexible;
+  auto nodeName = [&](int node) {
+    for (const FlexibleBody& fb : mesh.bodies)
+      if (node >= fb.firstNode && node < fb.firstNode + fb.nodeCount)
+        return fb.name + ".node" + std::to_string(node - fb.firstNode);
+    return std::string("?");
+  };
+  for (std::size_t n = 0; n < mesh.nodes.size(); ++n) {
+    const int d = mesh.nodes[n].drive;
+    if (d >= 0 && mesh.drives[d].inputOffset >= 0)
+      t.add(nodeName(int(n)) + ".drive_rate", Causality::Input, Variability::Continuous, "rad/s",
+            "rotation rate of the driven support about its axis", {QK::FlexibleInput, mesh.drives[d].inputOffset},
+            0.0);
+  }
+  for (const FlexLoad& l : mesh.loads) {
+    if (l.inputOffset < 0) continue;
+    const char* frame = l.follower ? "node frame" : "world";
+    for (int c = 0; c < 3; ++c)
+      t.add(nodeName(l.node) + ".force." + kAxes[c], Causality::Input, Variability::Continuous, "N",
+            std::string("nodal force, ") + frame, {QK::FlexibleInput, l.inputOffset + c}, 0.0);
+    for (int c = 0; c < 3; ++c)
+      t.add(nodeName(l.node) + ".moment." + kAxes[c], Causality::Input, Variability::Continuous, "N.m",
+            std::string("nodal moment, ") + frame, {QK::FlexibleInput, l.inputOffset + 3 + c}, 0.0);
+  }
+
+  // Outputs: joints, then bodies, then flexible nodes and elements, as the scene selects.
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
     if (!selected(scene.outputs.allJoints, scene.outputs.joints, jt.name)) continue;
@@ -132,6 +164,39 @@ std::vector<Variable> variableTable(const Scene& scene) {
     for (int c = 0; c < 3; ++c)
       t.output(name + ".angular_velocity." + kAxes[c], "rad/s", "angular velocity, world",
                {QK::BodyAngularVelocity, b, c});
+  }
+  for (std::size_t b = 0; b < scene.flexibleBodies.size(); ++b) {
+    const FlexibleBodySpec& spec = scene.flexibleBodies[b];
+    const FlexibleBody& fb = mesh.bodies[b];
+    std::vector<int> nodes = spec.outputNodes;
+    if (spec.allNodes)
+      for (int i = 0; i < fb.nodeCount; ++i) nodes.push_back(i);
+    for (int i : nodes) {
+      const std::string name = spec.name + ".node" + std::to_string(i);
+      const int n = fb.firstNode + i;
+      for (int c = 0; c < 3; ++c)
+        t.output(name + ".position." + kAxes[c], "m", "node position, world", {QK::NodePosition, n, c});
+      for (int c = 0; c < 4; ++c)
+        t.output(name + ".orientation." + kQuaternion[c], "", "unit quaternion node -> world",
+                 {QK::NodeOrientation, n, c});
+      for (int c = 0; c < 3; ++c)
+        t.output(name + ".velocity." + kAxes[c], "m/s", "node velocity, world", {QK::NodeVelocity, n, c});
+      for (int c = 0; c < 3; ++c)
+        t.output(name + ".angular_velocity." + kAxes[c], "rad/s", "node angular velocity, world",
+                 {QK::NodeAngularVelocity, n, c});
+    }
+    for (int e : spec.outputElements) {
+      const std::string name = spec.name + ".element" + std::to_string(e);
+      for (int end = 0; end < 2; ++end) {
+        const std::string at = name + ".end" + std::to_string(end + 1);
+        for (int c = 0; c < 3; ++c)
+          t.output(at + ".force." + kAxes[c], "N", "section force (N, Vy, Vz), element frame",
+                   {QK::ElementSectionForce, fb.firstElement + e, 6 * end + c});
+        for (int c = 0; c < 3; ++c)
+          t.output(at + ".moment." + kAxes[c], "N.m", "section moment (T, My, Mz), element frame",
+                   {QK::ElementSectionForce, fb.firstElement + e, 6 * end + 3 + c});
+      }
+    }
   }
   return t.table;
 }

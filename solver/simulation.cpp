@@ -1,5 +1,7 @@
 #include "simulation.hpp"
 
+#include "integrator/generalized_alpha.hpp"
+#include "integrator/static_equilibrium.hpp"
 #include "rigid/recursive_dynamics.hpp"
 
 namespace mfbd {
@@ -11,6 +13,7 @@ void setSceneParameter(Scene& scene, const Quantity& q, double value) {
     case QuantityKind::StepSizeMax: scene.solver.hMax = value; break;
     case QuantityKind::SpectralRadius: scene.solver.rhoInf = value; break;
     case QuantityKind::JointDamping: scene.joints[q.index].damping = value; break;
+    case QuantityKind::FlexibleDamping: scene.flexibleBodies[q.index].damping = value; break;
     default: break;
   }
 }
@@ -22,49 +25,59 @@ double sceneParameter(const Scene& scene, const Quantity& q) {
     case QuantityKind::StepSizeMax: return scene.solver.hMax;
     case QuantityKind::SpectralRadius: return scene.solver.rhoInf;
     case QuantityKind::JointDamping: return scene.joints[q.index].damping;
+    case QuantityKind::FlexibleDamping: return scene.flexibleBodies[q.index].damping;
     default: return 0.0;
   }
 }
 
 Simulation::Simulation(const Scene& scene)
-    : scene_(scene), system_(assemble(scene)), integrator_(scene.solver) {
+    : scene_(scene), system_(assemble(scene)) {
+  if (scene.analysis == Analysis::Static) stepper_ = std::make_unique<StaticEquilibrium>(scene.solver);
+  else stepper_ = std::make_unique<GeneralizedAlpha>(scene.solver);
   const Model& model = system_.model();
   for (const BodySpec& b : scene.bodies) bodyIndex_.push_back(findBody(model, b.name));
   for (const JointSpec& j : scene.joints) jointIndex_.push_back(findJoint(model, j.name));
-  orientation_.assign(scene.bodies.size(), Quat::Identity());
+  orientation_.assign(scene.bodies.size() + model.flexible.nodes.size(), Quat::Identity());
   state_.q = model.initialConfiguration;
   state_.v = model.initialVelocity;
 }
 
 bool Simulation::initialize(double t0, std::string& message) {
   state_.t = t0;
-  if (!integrator_.initialize(system_, state_, message)) return false;
+  system_.endStep(t0);
+  if (!stepper_->initialize(system_, state_, message)) return false;
   outputsCurrent_ = false;
   evaluateOutputs();
-  for (std::size_t i = 0; i < orientation_.size(); ++i) {
-    orientation_[i] = Quat(system_.data().body[bodyIndex_[i]].orientation);
-    if (orientation_[i].w() < 0.0) orientation_[i].coeffs() *= -1.0;
-  }
+  updateQuaternions(true);
   return true;
+}
+
+// Quaternions of bodies and nodes, each sign-continuous with the previous
+// communication point (w >= 0 at the start).
+void Simulation::updateQuaternions(bool reset) {
+  const std::size_t nb = bodyIndex_.size();
+  for (std::size_t i = 0; i < orientation_.size(); ++i) {
+    const Mat3& A = i < nb ? system_.data().body[bodyIndex_[i]].orientation : system_.nodes()[i - nb].pose.A;
+    Quat q(A);
+    const double reference = reset ? q.w() : q.coeffs().dot(orientation_[i].coeffs());
+    if (reference < 0.0) q.coeffs() *= -1.0;
+    orientation_[i] = q;
+  }
 }
 
 AdvanceResult Simulation::doStep(double H) {
   IntegratorState start = state_;
-  AdvanceResult result = integrator_.advance(system_, state_, state_.t + H);
+  AdvanceResult result = stepper_->advance(system_, state_, state_.t + H);
   if (!result.ok) {
     state_ = std::move(start);
     outputsCurrent_ = false;  // the workspace holds the failed trial, not the restored state
     return result;
   }
+  system_.endStep(state_.t);
   inputsChangedSinceStep_ = false;
   outputsCurrent_ = false;
   evaluateOutputs();
-  // Quaternion sign continuous with the previous communication point.
-  for (std::size_t i = 0; i < orientation_.size(); ++i) {
-    Quat qn(system_.data().body[bodyIndex_[i]].orientation);
-    if (qn.coeffs().dot(orientation_[i].coeffs()) < 0.0) qn.coeffs() *= -1.0;
-    orientation_[i] = qn;
-  }
+  updateQuaternions(false);
   return result;
 }
 
@@ -74,12 +87,12 @@ AdvanceResult Simulation::doStep(double H) {
 void Simulation::evaluateOutputs() {
   if (outputsCurrent_) return;
   VectorXd vdot = state_.vdot;
-  if (inputsChangedSinceStep_) {
+  if (inputsChangedSinceStep_ && scene_.analysis == Analysis::Dynamic) {
     IntegratorState probe = state_;
     std::string message;
-    if (integrator_.initialize(system_, probe, message)) vdot = probe.vdot;
+    if (stepper_->initialize(system_, probe, message)) vdot = probe.vdot;
   }
-  system_.evaluate(state_.q, state_.v, vdot);
+  system_.evaluate(state_.t, state_.q, state_.v, vdot);
   outputsCurrent_ = true;
 }
 
@@ -95,9 +108,15 @@ double Simulation::read(const Quantity& q) {
       const Joint& j = model.joints[jointIndex_[q.index]];
       return system_.jointInputs()[j.inputOffset + q.component];
     }
+    case QuantityKind::FlexibleInput: return system_.flexibleInputs()[q.index];
+    case QuantityKind::FlexibleDamping: {
+      const FlexibleBody& b = model.flexible.bodies[q.index];
+      return b.elementCount > 0 ? model.flexible.elements[b.firstElement].damping : 0.0;
+    }
     default: break;
   }
   evaluateOutputs();
+  if (q.kind >= QuantityKind::NodePosition) return readFlexible(q);
   const Data& data = system_.data();
   if (q.kind == QuantityKind::JointCoordinate || q.kind == QuantityKind::JointRate ||
       q.kind == QuantityKind::JointReactionForce || q.kind == QuantityKind::JointReactionTorque) {
@@ -129,6 +148,30 @@ double Simulation::read(const Quantity& q) {
   }
 }
 
+double Simulation::readFlexible(const Quantity& q) {
+  const FlexibleMesh& mesh = system_.model().flexible;
+  if (q.kind == QuantityKind::ElementSectionForce) {
+    const FlexElement& e = mesh.elements[q.index];
+    const NodeState &a = system_.nodes()[e.node1], &b = system_.nodes()[e.node2];
+    const BeamForces f = internalForces(e.beam, a.pose, b.pose, a.velocity, b.velocity, e.damping);
+    const SectionForces s = sectionForces(e.beam, a.pose, b.pose, f.f);
+    const Vec3* parts[4] = {&s.force1, &s.moment1, &s.force2, &s.moment2};
+    return (*parts[q.component / 3])[q.component % 3];
+  }
+  const NodeState& n = system_.nodes()[q.index];
+  switch (q.kind) {
+    case QuantityKind::NodePosition: return n.pose.r[q.component];
+    case QuantityKind::NodeVelocity: return n.velocity.v[q.component];
+    case QuantityKind::NodeAngularVelocity: return (n.pose.A * n.velocity.omega)[q.component];
+    case QuantityKind::NodeOrientation: {
+      const Quat& o = orientation_[bodyIndex_.size() + q.index];
+      const double wxyz[4] = {o.w(), o.x(), o.y(), o.z()};
+      return wxyz[q.component];
+    }
+    default: return 0.0;
+  }
+}
+
 bool Simulation::write(const Quantity& q, double value) {
   Model& model = system_.tunableModel();
   switch (q.kind) {
@@ -139,6 +182,16 @@ bool Simulation::write(const Quantity& q, double value) {
     case QuantityKind::JointForceInput: {
       const Joint& j = model.joints[jointIndex_[q.index]];
       system_.jointInputs()[j.inputOffset + q.component] = value;
+      inputsChangedSinceStep_ = true;
+      break;
+    }
+    case QuantityKind::FlexibleInput:
+      system_.flexibleInputs()[q.index] = value;
+      inputsChangedSinceStep_ = true;
+      break;
+    case QuantityKind::FlexibleDamping: {
+      const FlexibleBody& b = model.flexible.bodies[q.index];
+      for (int e = 0; e < b.elementCount; ++e) model.flexible.elements[b.firstElement + e].damping = value;
       inputsChangedSinceStep_ = true;
       break;
     }

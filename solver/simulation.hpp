@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-#include "integrator/generalized_alpha.hpp"
+#include "integrator/time_stepper.hpp"
 #include "system.hpp"
 
 namespace mfbd {
@@ -25,6 +25,13 @@ enum class QuantityKind {
   BodyOrientation,      // quaternion w, x, y, z (body -> world)
   BodyVelocity,
   BodyAngularVelocity,
+  NodePosition,         // index: mesh node; world
+  NodeOrientation,      // quaternion w, x, y, z (node -> world)
+  NodeVelocity,
+  NodeAngularVelocity,  // world
+  ElementSectionForce,  // index: mesh element; component 0..5 end 1 (N, Vy, Vz, T, My, Mz), 6..11 end 2
+  FlexibleInput,        // index: offset into the flexible inputs (load components, drive rates)
+  FlexibleDamping,      // index: flexible body (scene order)                       (tunable)
 };
 
 struct Quantity {
@@ -57,12 +64,15 @@ class Simulation {
  private:
   void evaluateOutputs();
 
+  void updateQuaternions(bool reset);
+  double readFlexible(const Quantity& q);
+
   const Scene scene_;
   System system_;
-  GeneralizedAlpha integrator_;
+  std::unique_ptr<TimeStepper> stepper_;
   IntegratorState state_;
   std::vector<int> bodyIndex_, jointIndex_;  // scene order -> model order
-  std::vector<Quat> orientation_;            // sign-continuous across steps, scene body order
+  std::vector<Quat> orientation_;            // sign-continuous across steps: scene bodies, then mesh nodes
   bool outputsCurrent_ = false;
   bool inputsChangedSinceStep_ = false;
 };

@@ -1,7 +1,9 @@
 // System: the mechanical system as the integrator sees it (Dynamics), built
-// from a Model. Today: a rigid tree in joint coordinates with gravity, joint
-// damping and joint-force inputs.
+// from a Model: a rigid tree in joint coordinates (gravity, joint damping,
+// joint-force inputs) and flexible bodies of corotational beams (supports,
+// loads, drives). Velocities: joint rates first, then free node DOFs.
 #pragma once
+#include "flex/flexible_mesh.hpp"
 #include "integrator/dynamics.hpp"
 #include "model/data.hpp"
 
@@ -14,10 +16,18 @@ class System : public Dynamics {
   const Model& model() const { return model_; }
   Model& tunableModel() { return model_; }  // for tunable parameters only
   const Data& data() const { return data_; }
+  const std::vector<NodeState>& nodes() const { return nodes_; }
 
   // Generalized joint-force inputs (torques/forces along actuated DOFs).
   VectorXd& jointInputs() { return jointInputs_; }
   const VectorXd& jointInputs() const { return jointInputs_; }
+  // Flexible-body inputs: six per input load, one per rate-driven support.
+  VectorXd& flexibleInputs() { return flexibleInputs_; }
+  const VectorXd& flexibleInputs() const { return flexibleInputs_; }
+  // Rate-input drives integrate their angle; fold it in at each step end.
+  const DriveState& driveState() const { return drives_; }
+  void setDriveState(const DriveState& d) { drives_ = d; }
+  void endStep(double t);
 
   int velocityCount() const override { return model_.velocityCount; }
   int constraintCount() const override { return 0; }
@@ -27,17 +37,22 @@ class System : public Dynamics {
   void tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian) override;
 
-  // Kinematics and joint reactions of a state into data() (for outputs).
-  void evaluate(const Configuration& q, const VectorXd& v, const VectorXd& vdot);
+  // Kinematics, joint reactions and node states of a state into data() and
+  // nodes() (for outputs).
+  void evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot);
 
  private:
+  void rigidResidual(const Configuration& q, const VectorXd& v, const VectorXd& vdot, VectorXd& r);
+  void rigidTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot, double cM, double cC,
+                    double cK, Triplets& iteration);
   void jointForces(const VectorXd& v, VectorXd& tau) const;
-  void appliedForces();
 
   Model model_;
   Data data_;
-  VectorXd jointInputs_;
-  VectorXd tau_;
+  VectorXd jointInputs_, flexibleInputs_;
+  DriveState drives_;
+  std::vector<NodeState> nodes_;
+  VectorXd tau_, rigid_;
 };
 
 }  // namespace mfbd

@@ -5,7 +5,7 @@
 
 namespace mfbd {
 
-GeneralizedAlpha::GeneralizedAlpha(const SolverOptions& options) : options_(options) {
+GeneralizedAlpha::GeneralizedAlpha(const SolverOptions& options) : TimeStepper(options) {
   const double rho = options.rhoInf;
   alphaM_ = (2.0 * rho - 1.0) / (rho + 1.0);
   alphaF_ = rho / (rho + 1.0);
@@ -15,21 +15,6 @@ GeneralizedAlpha::GeneralizedAlpha(const SolverOptions& options) : options_(opti
 
 namespace {
 bool allFinite(const VectorXd& x) { return x.allFinite(); }
-
-SparseMatrix buildMatrix(int n, int m, const Triplets& iteration, const Triplets& constraintJacobian) {
-  Triplets all = iteration;
-  all.reserve(iteration.size() + 2 * constraintJacobian.size());
-  for (const auto& t : constraintJacobian) {
-    all.emplace_back(n + t.row(), t.col(), t.value());
-    all.emplace_back(t.col(), n + t.row(), t.value());
-  }
-  SparseMatrix S(n + m, n + m);
-  S.setFromTriplets(all.begin(), all.end());
-  // Keep every diagonal entry structurally present so the pattern is stable.
-  for (int i = 0; i < n + m; ++i) S.coeffRef(i, i) += 0.0;
-  S.makeCompressed();
-  return S;
-}
 }  // namespace
 
 bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std::string& message) {
@@ -42,10 +27,8 @@ bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std:
   state.lambda = VectorXd::Zero(m);
   VectorXd r, phi;
   system.residual(state.t, state.q, state.v, state.vdot, state.lambda, r, phi);
-  Triplets M, G;
-  system.tangent(state.t, state.q, state.v, state.vdot, state.lambda, 1.0, 0.0, 0.0, M, G);
   LinearSolver mass;
-  const SparseMatrix S = buildMatrix(n, m, M, G);
+  const SparseMatrix S = iterationMatrix(system, state, 1.0, 0.0, 0.0);
   mass.analyzePattern(S);
   if (mass.factorize(S) != LinearSolver::Status::Ok) {
     message = "the mass matrix is singular at the initial configuration";
@@ -65,10 +48,7 @@ bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial,
   const int n = system.velocityCount(), m = system.constraintCount();
   const double betaPrime = (1.0 - alphaM_) / (beta_ * h * h * (1.0 - alphaF_));
   const double gammaPrime = gamma_ / (beta_ * h);
-  Triplets iteration, jacobian;
-  system.tangent(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, 1.0, gammaPrime / betaPrime, 1.0 / betaPrime,
-                 iteration, jacobian);
-  const SparseMatrix S = buildMatrix(n, m, iteration, jacobian);
+  const SparseMatrix S = iterationMatrix(system, trial, 1.0, gammaPrime / betaPrime, 1.0 / betaPrime);
   if (patternSize_ != n + m) {
     solver_.analyzePattern(S);
     patternSize_ = n + m;
@@ -151,44 +131,6 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
   why = msg.str();
   factoredStep_ = 0.0;
   return false;
-}
-
-AdvanceResult GeneralizedAlpha::advance(Dynamics& system, IntegratorState& s, double tEnd) {
-  AdvanceResult result;
-  // A fresh iteration matrix at every communication point: a run restored
-  // from a saved state then replays the original bit for bit.
-  factoredStep_ = 0.0;
-  double h = std::min(s.h > 0.0 ? s.h : options_.hMax, options_.hMax);
-  int successes = 0;
-  while (tEnd - s.t > 1e-12 * std::max(1.0, std::abs(tEnd))) {
-    const double remaining = tEnd - s.t;
-    // Take the rest in one substep when it fits (within round-off), else h.
-    const double step = remaining <= h * (1.0 + 1e-9) ? remaining : h;
-    std::string why;
-    if (substep(system, s, step, why)) {
-      if (++successes >= 2 && h < options_.hMax) {
-        h = std::min(2.0 * h, options_.hMax);
-        successes = 0;
-      }
-      continue;
-    }
-    ++s.rejectedSubsteps;
-    successes = 0;
-    h = 0.5 * step;
-    if (h < options_.hMin) {
-      std::ostringstream msg;
-      msg << "substep failed at t = " << s.t << " with h = " << step << " (h_min = " << options_.hMin
-          << "): " << why;
-      result.ok = false;
-      result.reachedTime = s.t;
-      result.message = msg.str();
-      return result;
-    }
-  }
-  s.t = tEnd;
-  s.h = h;
-  result.reachedTime = tEnd;
-  return result;
 }
 
 }  // namespace mfbd

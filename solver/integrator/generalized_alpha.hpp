@@ -7,48 +7,26 @@
 // Newton failure halves the substep down to h_min; the caller keeps the state
 // of the step start and reports a discarded step.
 #pragma once
-#include "integrator/dynamics.hpp"
-#include "integrator/linear_solver.hpp"
-#include "scene/scene.hpp"
+#include "integrator/time_stepper.hpp"
 
 namespace mfbd {
 
-struct IntegratorState {
-  double t = 0.0;
-  Configuration q;
-  VectorXd v, vdot, a, lambda;  // a: the algorithmic acceleration of the method
-  double h = 0.0;               // substep size to try next
-  // Counters since the start of the run.
-  long substeps = 0;
-  long newtonIterations = 0;
-  long factorizations = 0;
-  long rejectedSubsteps = 0;
-};
-
-struct AdvanceResult {
-  bool ok = true;
-  double reachedTime = 0.0;  // on failure: how far substeps got before giving up
-  std::string message;
-};
-
-class GeneralizedAlpha {
+class GeneralizedAlpha : public TimeStepper {
  public:
   explicit GeneralizedAlpha(const SolverOptions& options);
 
   // Consistent initial accelerations (M vdot = Q at t) and a = vdot.
-  bool initialize(Dynamics& system, IntegratorState& state, std::string& message);
+  bool initialize(Dynamics& system, IntegratorState& state, std::string& message) override;
 
-  // Implicit substeps from state.t to tEnd. On failure `state` is left at an
-  // intermediate time: the caller restores the step start.
-  AdvanceResult advance(Dynamics& system, IntegratorState& state, double tEnd);
-
-  const SolverOptions& options() const { return options_; }
+ protected:
+  bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why) override;
+  // A fresh iteration matrix at every communication point: a run restored
+  // from a saved state then replays the original bit for bit.
+  void beginAdvance() override { factoredStep_ = 0.0; }
 
  private:
-  bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why);
   bool factorize(Dynamics& system, const IntegratorState& trial, double h);
 
-  SolverOptions options_;
   double alphaM_, alphaF_, gamma_, beta_;
   LinearSolver solver_;
   int patternSize_ = -1;

@@ -129,6 +129,10 @@ Model assemble(const Scene& scene) {
     model.bodies[child].inboardJoint = int(model.joints.size());
     model.joints.push_back(j);
   }
+  model.rigidVelocityCount = model.velocityCount;
+  model.analysis = scene.analysis;
+  assembleFlexibleBodies(scene, model.flexible, model.blocks, model.initialConfiguration, model.initialVelocity,
+                         model.velocityCount);
   return model;
 }
 

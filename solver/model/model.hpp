@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "flex/flexible_mesh.hpp"
 #include "model/configuration.hpp"
 #include "scene/scene.hpp"
 
@@ -53,7 +54,10 @@ struct Model {
   std::vector<Joint> joints;    // tree joints (joints[bodies[i].inboardJoint]) and cut joints
   Vec3 gravity = Vec3::Zero();
   SolverOptions solver;
+  FlexibleMesh flexible;        // nodes, beam elements, supports, loads, drives
+  Analysis analysis = Analysis::Dynamic;
   std::vector<CoordinateBlock> blocks;  // the configuration manifold
+  int rigidVelocityCount = 0;   // joint rates come first in v, then flexible nodes
   int velocityCount = 0;
   int jointInputCount = 0;
   Configuration initialConfiguration;

@@ -11,7 +11,7 @@ Data::Data(const Model& model)
       appliedTorque(model.bodies.size(), Vec3::Zero()),
       subtreeForce(model.bodies.size(), Vec3::Zero()),
       subtreeTorque(model.bodies.size(), Vec3::Zero()),
-      velocityTransformation(Eigen::MatrixXd::Zero(6 * model.bodies.size(), model.velocityCount)) {}
+      velocityTransformation(Eigen::MatrixXd::Zero(6 * model.bodies.size(), model.rigidVelocityCount)) {}
 
 void forwardKinematics(const Model& model, Data& data, const Configuration& q, const VectorXd& v,
                        const VectorXd& vdot) {
@@ -62,7 +62,7 @@ void forwardKinematics(const Model& model, Data& data, const Configuration& q, c
 
 void computeVelocityTransformation(const Model& model, Data& data) {
   Eigen::MatrixXd& B = data.velocityTransformation;
-  B.setZero(6 * model.bodies.size(), model.velocityCount);
+  B.setZero(6 * model.bodies.size(), model.rigidVelocityCount);
   for (int i = 0; i < int(model.bodies.size()); ++i) {
     const Body& b = model.bodies[i];
     const Joint& jt = model.joints[b.inboardJoint];
@@ -77,7 +77,7 @@ void computeVelocityTransformation(const Model& model, Data& data) {
 }
 
 void backwardNewtonEuler(const Model& model, Data& data, const VectorXd& jointForces, VectorXd& residual) {
-  residual.setZero(model.velocityCount);
+  residual.setZero(model.rigidVelocityCount);
   const int n = int(model.bodies.size());
   for (int i = 0; i < n; ++i) {
     const Body& b = model.bodies[i];
@@ -104,7 +104,7 @@ void backwardNewtonEuler(const Model& model, Data& data, const VectorXd& jointFo
 
 Eigen::MatrixXd jointSpaceMassMatrix(const Model& model, const Data& data) {
   const Eigen::MatrixXd& B = data.velocityTransformation;
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(model.velocityCount, model.velocityCount);
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(model.rigidVelocityCount, model.rigidVelocityCount);
   for (int i = 0; i < int(model.bodies.size()); ++i) {
     const Body& b = model.bodies[i];
     const Mat3& A = data.body[i].orientation;

@@ -1,6 +1,8 @@
 #include "scene/expression.hpp"
 
+#include <algorithm>
 #include <cctype>
+#include <vector>
 #include <cmath>
 #include <stdexcept>
 
@@ -95,16 +97,31 @@ class Parser {
       ++pos_;
     const std::string name = s_.substr(start, pos_ - start);
     if (accept('(')) {
-      const double x = sum();
+      std::vector<double> args = {sum()};
+      while (accept(',')) args.push_back(sum());
       if (!accept(')')) fail("missing ')' after " + name + "(");
-      return call(name, x);
+      return call(name, args);
     }
     if (name == "pi") return M_PI;
     const auto it = params_.find(name);
     if (it == params_.end()) fail("unknown parameter '" + name + "'");
     return it->second;
   }
-  double call(const std::string& f, double x) const {
+  double call(const std::string& f, const std::vector<double>& a) const {
+    const std::size_t n = a.size();
+    auto arity = [&](std::size_t want) {
+      if (n != want) fail(f + "() takes " + std::to_string(want) + " argument(s), got " + std::to_string(n));
+    };
+    if (f == "min" || f == "max") {
+      arity(2);
+      return f == "min" ? std::min(a[0], a[1]) : std::max(a[0], a[1]);
+    }
+    if (f == "if") {  // if(c, a, b): a where c > 0, else b
+      arity(3);
+      return a[0] > 0.0 ? a[1] : a[2];
+    }
+    arity(1);
+    const double x = a[0];
     if (f == "sqrt") return std::sqrt(x);
     if (f == "sin") return std::sin(x);
     if (f == "cos") return std::cos(x);
@@ -127,6 +144,28 @@ class Parser {
 
 double evaluateExpression(const std::string& text, const std::map<std::string, double>& parameters) {
   return Parser(text, parameters).parse();
+}
+
+TimeFunction::TimeFunction(std::string expression, std::map<std::string, double> parameters)
+    : expression_(std::move(expression)), parameters_(std::move(parameters)) {
+  parameters_["t"] = 0.0;
+}
+
+double TimeFunction::operator()(double t) const {
+  std::map<std::string, double> p = parameters_;
+  p["t"] = t;
+  return evaluateExpression(expression_, p);
+}
+
+// Steps balance truncation (h^2) against round-off (eps/h, eps/h^2).
+double TimeFunction::rate(double t) const {
+  const double h = 1e-5 * std::max(1.0, std::abs(t));
+  return ((*this)(t + h) - (*this)(t - h)) / (2.0 * h);
+}
+
+double TimeFunction::acceleration(double t) const {
+  const double h = 1e-4 * std::max(1.0, std::abs(t));
+  return ((*this)(t + h) - 2.0 * (*this)(t) + (*this)(t - h)) / (h * h);
 }
 
 }  // namespace mfbd

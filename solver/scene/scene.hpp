@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "flex/beam_section.hpp"
 #include "math/rotation.hpp"
+#include "scene/expression.hpp"
 
 namespace mfbd {
 
@@ -51,6 +53,57 @@ struct JointSpec {
   bool torqueInput = false;  // an FMI input acting along the joint's DOFs
 };
 
+// A support of a flexible node (Dirichlet condition, eliminated from the
+// unknowns): clamp (position and rotation fixed), pin (position fixed),
+// slide (position moves along `direction` only), driven (position fixed,
+// rotation prescribed about the world `axis`: angle(t), or its rate from an
+// FMI input).
+struct SupportSpec {
+  enum class Kind { Clamp, Pin, Slide, Driven };
+  Kind kind = Kind::Clamp;
+  int node = 0;
+  Vec3 direction = Vec3::UnitX();  // slide direction, or driven rotation axis (world)
+  TimeFunction angle;              // driven: rotation angle of time (rad)
+  bool rateInput = false;          // driven: the angle's rate comes from an FMI input
+};
+
+struct PointMassSpec {
+  int node = 0;
+  double mass = 0.0;
+  Mat3 inertia = Mat3::Zero();  // about the node, node frame
+};
+
+// A nodal force and moment: (force, moment) * scale(t), world axes (dead) or
+// node axes (follower); or the six components from FMI inputs.
+struct NodalLoadSpec {
+  int node = 0;
+  Vec3 force = Vec3::Zero();
+  Vec3 moment = Vec3::Zero();
+  bool follower = false;
+  TimeFunction scale;
+  bool input = false;
+};
+
+// A flexible body: nodes (position; orientation of a beam line's section
+// frame), two-node corotational beam elements, one section and material.
+struct FlexibleBodySpec {
+  std::string name;
+  std::vector<Vec3> nodes;
+  std::vector<Mat3> nodeOrientations;
+  std::vector<std::pair<int, int>> elements;
+  Vec3 sectionY = Vec3::UnitY();  // section y axis in the design configuration (world)
+  BeamSection section;
+  double damping = 0.0;           // stiffness-proportional damping coefficient, s
+  std::vector<SupportSpec> supports;
+  std::vector<PointMassSpec> pointMasses;
+  std::vector<NodalLoadSpec> loads;
+  bool allNodes = false;          // outputs: every node, or those listed
+  std::vector<int> outputNodes;
+  std::vector<int> outputElements;
+};
+
+enum class Analysis { Dynamic, Static };
+
 struct SolverOptions {
   double hMax = 1e-3;       // largest implicit substep, s
   double hMin = 1e-9;       // smallest substep before a step is discarded, s
@@ -83,7 +136,11 @@ struct Scene {
   Experiment experiment;
   std::vector<BodySpec> bodies;
   std::vector<JointSpec> joints;
+  std::vector<FlexibleBodySpec> flexibleBodies;
   OutputSelection outputs;
+  // Static: each step solves equilibrium at the loads of its end time (load
+  // stepping with Newton; halving on failure), no inertia.
+  Analysis analysis = Analysis::Dynamic;
 };
 
 // One bad-input error: where (a JSON path such as "joints[1].axis") and what

@@ -25,6 +25,8 @@ void checkNames(const Scene& scene) {
   for (std::size_t i = 0; i < scene.bodies.size(); ++i)
     claim(scene.bodies[i].name, "bodies[" + std::to_string(i) + "].name");
   for (std::size_t i = 0; i < scene.joints.size(); ++i) claim(scene.joints[i].name, jointPath(i) + ".name");
+  for (std::size_t i = 0; i < scene.flexibleBodies.size(); ++i)
+    claim(scene.flexibleBodies[i].name, "flexible_bodies[" + std::to_string(i) + "].name");
 }
 
 void checkJoint(const Scene& scene, std::size_t i, const std::set<std::string>& bodies) {
@@ -92,7 +94,8 @@ void checkOutputs(const Scene& scene, const std::set<std::string>& bodies) {
 }  // namespace
 
 void validateScene(const Scene& scene) {
-  if (scene.bodies.empty()) throw SceneError("bodies", "expected at least one body");
+  if (scene.bodies.empty() && scene.flexibleBodies.empty())
+    throw SceneError("bodies", "expected at least one body or flexible body");
   checkNames(scene);
   std::set<std::string> bodies;
   for (const auto& b : scene.bodies) bodies.insert(b.name);

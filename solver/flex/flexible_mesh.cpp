@@ -1,0 +1,140 @@
+#include "flex/flexible_mesh.hpp"
+
+namespace mfbd {
+
+double DriveState::angle(const FlexibleMesh& mesh, const VectorXd& inputs, int drive, double t) const {
+  const FlexDrive& d = mesh.drives[drive];
+  if (d.inputOffset < 0) return d.angle(t);
+  return startAngle[drive] + inputs[d.inputOffset] * (t - stepStart);
+}
+
+void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+                        double t, const DriveState& drives, const VectorXd& inputs, std::vector<NodeState>& nodes) {
+  nodes.resize(mesh.nodes.size());
+  for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
+    const FlexNode& n = mesh.nodes[i];
+    NodeState& s = nodes[i];
+    // Translation: r = r0 + T x with T the first three rows of P.
+    s.pose.r = n.reference.r;
+    s.velocity.v.setZero();
+    s.acceleration.a.setZero();
+    for (int c = 0; c < 3; ++c) {
+      if (n.dof[c] < 0) continue;
+      s.pose.r += n.P.block<3, 1>(0, c) * q.scalars[n.scalarOffset + c];
+      s.velocity.v += n.P.block<3, 1>(0, c) * v[n.dof[c]];
+      s.acceleration.a += n.P.block<3, 1>(0, c) * vdot[n.dof[c]];
+    }
+    if (n.rotation >= 0) {
+      s.pose.A = q.rotations[n.rotation];
+      s.velocity.omega = v.segment<3>(n.dof[3]);
+      s.acceleration.omegaDot = vdot.segment<3>(n.dof[3]);
+    } else if (n.drive >= 0) {
+      const FlexDrive& d = mesh.drives[n.drive];
+      const double angle = drives.angle(mesh, inputs, n.drive, t);
+      const double rate = d.inputOffset >= 0 ? inputs[d.inputOffset] : d.angle.rate(t);
+      const double acceleration = d.inputOffset >= 0 ? 0.0 : d.angle.acceleration(t);
+      s.pose.A = expSO3(d.axis * angle) * n.reference.A;
+      // The axis is fixed in the world: omega_node = A^T axis rate, and its
+      // derivative A^T axis rate_dot (the omega x omega term vanishes).
+      s.velocity.omega = s.pose.A.transpose() * d.axis * rate;
+      s.acceleration.omegaDot = s.pose.A.transpose() * d.axis * acceleration;
+    } else {
+      s.pose.A = n.reference.A;
+      s.velocity.omega.setZero();
+      s.acceleration.omegaDot.setZero();
+    }
+  }
+}
+
+namespace {
+
+// External force and moment of a load on its node: [force world; moment node frame].
+Vec6 loadVector(const FlexLoad& l, const NodeState& s, const VectorXd& inputs, double t) {
+  Vec3 force = l.force, moment = l.moment;
+  if (l.inputOffset >= 0) {
+    force = inputs.segment<3>(l.inputOffset);
+    moment = inputs.segment<3>(l.inputOffset + 3);
+  } else {
+    const double scale = l.scale(t);
+    force *= scale;
+    moment *= scale;
+  }
+  Vec6 f;
+  if (l.follower) {
+    f << s.pose.A * force, moment;
+  } else {
+    f << force, s.pose.A.transpose() * moment;
+  }
+  return f;
+}
+
+// Adds P^T g to r for a 6-vector g acting on node n.
+void scatter(const FlexNode& n, const Vec6& g, VectorXd& r) {
+  for (int c = 0; c < 6; ++c)
+    if (n.dof[c] >= 0) r[n.dof[c]] += n.P.col(c).dot(g);
+}
+
+// Adds P_a^T B P_b to the triplets for a 6 x 6 block B coupling nodes a, b.
+void scatter(const FlexNode& a, const FlexNode& b, const Mat6& B, Triplets& out) {
+  const Mat6 projected = a.P.transpose() * B * b.P;
+  for (int i = 0; i < 6; ++i) {
+    if (a.dof[i] < 0) continue;
+    for (int j = 0; j < 6; ++j)
+      if (b.dof[j] >= 0) out.emplace_back(a.dof[i], b.dof[j], projected(i, j));
+  }
+}
+
+}  // namespace
+
+bool flexibleResidual(const FlexibleMesh& mesh, const std::vector<NodeState>& nodes, const Vec3& gravity,
+                      const VectorXd& inputs, double t, bool withInertia, VectorXd& r) {
+  for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
+    const FlexNode& n = mesh.nodes[i];
+    Vec6 g = -nodalGravityForce(n.inertia, gravity);
+    if (withInertia) g += nodalInertiaForces(n.inertia, nodes[i].velocity, nodes[i].acceleration).f;
+    scatter(n, g, r);
+  }
+  for (const FlexElement& e : mesh.elements) {
+    const NodeState &s1 = nodes[e.node1], &s2 = nodes[e.node2];
+    const BeamForces f = internalForces(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping);
+    if (!f.valid) return false;
+    scatter(mesh.nodes[e.node1], f.f.head<6>(), r);
+    scatter(mesh.nodes[e.node2], f.f.tail<6>(), r);
+  }
+  for (const FlexLoad& l : mesh.loads) scatter(mesh.nodes[l.node], -loadVector(l, nodes[l.node], inputs, t), r);
+  return true;
+}
+
+void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nodes, const VectorXd& inputs, double t,
+                     double cM, double cC, double cK, Triplets& iteration) {
+  for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
+    const FlexNode& n = mesh.nodes[i];
+    const NodalInertiaForces in = nodalInertiaForces(n.inertia, nodes[i].velocity, nodes[i].acceleration);
+    scatter(n, n, cM * in.M + cC * in.G, iteration);
+  }
+  for (const FlexElement& e : mesh.elements) {
+    const NodeState &s1 = nodes[e.node1], &s2 = nodes[e.node2];
+    const BeamForces f = internalForces(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping);
+    const Mat12 S = cK * f.K + cC * f.C;
+    const FlexNode &a = mesh.nodes[e.node1], &b = mesh.nodes[e.node2];
+    scatter(a, a, S.topLeftCorner<6, 6>(), iteration);
+    scatter(a, b, S.topRightCorner<6, 6>(), iteration);
+    scatter(b, a, S.bottomLeftCorner<6, 6>(), iteration);
+    scatter(b, b, S.bottomRightCorner<6, 6>(), iteration);
+  }
+  // Loads that turn with the node: d(-f_ext)/d[dr; dtheta].
+  for (const FlexLoad& l : mesh.loads) {
+    const Vec6 f = loadVector(l, nodes[l.node], inputs, t);
+    Mat6 K = Mat6::Zero();
+    if (l.follower) {
+      // f_world = A f_local: d/dtheta = -A skew(f_local); minus for the residual.
+      K.block<3, 3>(0, 3) = nodes[l.node].pose.A * skew(nodes[l.node].pose.A.transpose() * f.head<3>());
+    } else {
+      // m_node = A^T m_world: d/dtheta = skew(m_node); minus for the residual.
+      K.block<3, 3>(3, 3) = -skew(f.tail<3>());
+    }
+    scatter(mesh.nodes[l.node], mesh.nodes[l.node], cK * K, iteration);
+  }
+}
+
+}  // namespace mfbd

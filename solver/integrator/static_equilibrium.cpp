@@ -1,0 +1,72 @@
+#include "integrator/static_equilibrium.hpp"
+
+#include <sstream>
+
+namespace mfbd {
+
+bool StaticEquilibrium::initialize(Dynamics& system, IntegratorState& state, std::string& message) {
+  const int n = system.velocityCount();
+  state.v = VectorXd::Zero(n);
+  state.vdot = VectorXd::Zero(n);
+  state.a = VectorXd::Zero(n);
+  state.lambda = VectorXd::Zero(system.constraintCount());
+  if (state.h <= 0.0) state.h = options_.hMax;
+  if (!solve(system, state, message)) {
+    message = "no static equilibrium at the start: " + message;
+    return false;
+  }
+  return true;
+}
+
+bool StaticEquilibrium::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
+  IntegratorState trial = s;
+  trial.t = s.t + h;
+  if (!solve(system, trial, why)) {
+    s.newtonIterations = trial.newtonIterations;
+    s.factorizations = trial.factorizations;
+    return false;
+  }
+  ++trial.substeps;
+  s = std::move(trial);
+  return true;
+}
+
+// Full Newton: the tangent stiffness is refactorised at every iteration.
+bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, std::string& why) {
+  const int n = system.velocityCount(), m = system.constraintCount();
+  VectorXd r, phi, rhs(n + m);
+  for (int k = 0; k < options_.maxIterations; ++k) {
+    system.residual(s.t, s.q, s.v, s.vdot, s.lambda, r, phi);
+    if (!r.allFinite() || !phi.allFinite()) {
+      why = "residual is not finite";
+      return false;
+    }
+    const SparseMatrix K = iterationMatrix(system, s, 0.0, 0.0, 1.0);
+    if (patternSize_ != n + m) {
+      solver_.analyzePattern(K);
+      patternSize_ = n + m;
+    }
+    ++s.factorizations;
+    if (solver_.factorize(K) != LinearSolver::Status::Ok) {
+      why = "singular tangent stiffness (an unsupported rigid-body mode, or a limit point)";
+      return false;
+    }
+    rhs << -r, -phi;
+    const VectorXd delta = solver_.solve(rhs);
+    ++s.newtonIterations;
+    const double size = delta.head(n).cwiseAbs().maxCoeff();
+    if (!std::isfinite(size)) {
+      why = "Newton correction is not finite";
+      return false;
+    }
+    system.retract(s.q, delta.head(n));
+    s.lambda += delta.tail(m);
+    if (size <= options_.tolerance) return true;
+  }
+  std::ostringstream msg;
+  msg << "Newton did not reach equilibrium in " << options_.maxIterations << " iterations";
+  why = msg.str();
+  return false;
+}
+
+}  // namespace mfbd

@@ -1,0 +1,56 @@
+// What advances a Dynamics in time: generalized-alpha for dynamics, or load
+// stepping to static equilibrium. Both share the substep loop: substeps of at
+// most h_max, halved on failure down to h_min, grown back after successes.
+#pragma once
+#include <string>
+
+#include "integrator/dynamics.hpp"
+#include "integrator/linear_solver.hpp"
+#include "scene/scene.hpp"
+
+namespace mfbd {
+
+struct IntegratorState {
+  double t = 0.0;
+  Configuration q;
+  VectorXd v, vdot, a, lambda;  // a: generalized-alpha's algorithmic acceleration
+  double h = 0.0;               // substep size to try next
+  // Counters since the start of the run.
+  long substeps = 0;
+  long newtonIterations = 0;
+  long factorizations = 0;
+  long rejectedSubsteps = 0;
+};
+
+struct AdvanceResult {
+  bool ok = true;
+  double reachedTime = 0.0;  // on failure: how far substeps got before giving up
+  std::string message;
+};
+
+class TimeStepper {
+ public:
+  explicit TimeStepper(const SolverOptions& options) : options_(options) {}
+  virtual ~TimeStepper() = default;
+
+  // A consistent start at state.t (accelerations, or equilibrium).
+  virtual bool initialize(Dynamics& system, IntegratorState& state, std::string& message) = 0;
+
+  // Substeps from state.t to tEnd. On failure `state` is left at an
+  // intermediate time: the caller restores the step start.
+  AdvanceResult advance(Dynamics& system, IntegratorState& state, double tEnd);
+
+  const SolverOptions& options() const { return options_; }
+
+ protected:
+  // One substep of size h from s.t; false (with a reason) leaves s unchanged.
+  virtual bool substep(Dynamics& system, IntegratorState& s, double h, std::string& why) = 0;
+  virtual void beginAdvance() {}
+
+  // The Newton matrix [S Phi_q^T; Phi_q 0] from the system's tangent.
+  static SparseMatrix iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK);
+
+  SolverOptions options_;
+};
+
+}  // namespace mfbd
