@@ -120,6 +120,12 @@ void writeStructure(std::ostream& x, const std::vector<Variable>& table) {
   std::string inputs;
   for (std::size_t i = 0; i < table.size(); ++i)
     if (table[i].causality == Causality::Input) inputs += (inputs.empty() ? "" : " ") + std::to_string(i + 1);
+  bool anyOutput = false;
+  for (const Variable& v : table) anyOutput = anyOutput || v.causality == Causality::Output;
+  if (!anyOutput) {  // the schema wants no empty Outputs / InitialUnknowns
+    x << "  <ModelStructure/>\n";
+    return;
+  }
   x << "  <ModelStructure>\n    <Outputs>\n";
   for (std::size_t i = 0; i < table.size(); ++i) {
     if (table[i].causality != Causality::Output) continue;

@@ -253,7 +253,7 @@ LocalDeformation localDeformation(const CorotationalBeam& beam, const NodePose& 
 
 BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
                           const NodePose& n2, const NodeVelocity& v1,
-                          const NodeVelocity& v2, double dampingBeta) {
+                          const NodeVelocity& v2, double dampingBeta, bool withTangent) {
   BeamForces out;
   Kinematics k = corotatedFrame(beam, n1, n2);
   if (!k.valid) return out;
@@ -263,8 +263,12 @@ BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
   v << v1.v, v1.omega, v2.v, v2.omega;
   const Vec7 eDot = k.B * v;  // rates of the local deformations
   const Vec7 fl = Kl * localDeformationVector(k) + dampingBeta * (Kl * eDot);
-  const Eigen::Matrix<double, 12, 7> BtKl = k.B.transpose() * Kl;
   out.f = k.B.transpose() * fl;
+  if (!withTangent) {
+    out.valid = out.f.allFinite();
+    return out;
+  }
+  const Eigen::Matrix<double, 12, 7> BtKl = k.B.transpose() * Kl;
   out.C = dampingBeta * BtKl * k.B;
   out.K = BtKl * k.B;
   // Geometric part d(B^T)/dq f_l, column by column; with damping also the

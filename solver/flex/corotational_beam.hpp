@@ -75,7 +75,8 @@ struct BeamForces {
 
 BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
                           const NodePose& n2, const NodeVelocity& v1,
-                          const NodeVelocity& v2, double dampingBeta);
+                          const NodeVelocity& v2, double dampingBeta,
+                          bool withTangent = true);  // false: f only (residual evaluations)
 
 // Stress resultants at the element ends in the corotated element frame,
 // force (N, Vy, Vz) and moment (T, My, Mz); at each end the action of the

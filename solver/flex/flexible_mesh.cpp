@@ -96,7 +96,7 @@ bool flexibleResidual(const FlexibleMesh& mesh, const std::vector<NodeState>& no
   }
   for (const FlexElement& e : mesh.elements) {
     const NodeState &s1 = nodes[e.node1], &s2 = nodes[e.node2];
-    const BeamForces f = internalForces(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping);
+    const BeamForces f = internalForces(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping, false);
     if (!f.valid) return false;
     scatter(mesh.nodes[e.node1], f.f.head<6>(), r);
     scatter(mesh.nodes[e.node2], f.f.tail<6>(), r);

@@ -4,9 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/SVD>
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "coupling/joint_constraint.hpp"
 #include "model/model.hpp"
