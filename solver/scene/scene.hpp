@@ -108,7 +108,7 @@ struct SolverOptions {
   double hMax = 1e-3;       // largest implicit substep, s
   double hMin = 1e-9;       // smallest substep before a step is discarded, s
   double rhoInf = 0.8;      // generalized-alpha spectral radius at infinity
-  double tolerance = 1e-10; // Newton: largest position increment (m, rad)
+  double tolerance = 1e-12; // Newton: largest position increment (m, rad)
   int maxIterations = 12;
 };
 
