@@ -86,6 +86,7 @@ Instance* Instance::create(const std::string& name, const std::string& guid, con
     c->byReference_[c->table_[i].valueReference] = i;
     c->values_[i] = c->table_[i].start;
   }
+  for (const std::string& note : c->scene_.notes) c->log(fmi2OK, "logEvents", note);
   c->log(fmi2OK, "logEvents", "instantiated scene '" + c->scene_.name + "' with " +
                                   std::to_string(c->table_.size()) + " variables");
   return c.release();
@@ -225,6 +226,7 @@ bool Instance::checkValue(const Variable& v, double value, std::string& why) con
       why = "expected a spectral radius in [0, 1]";
       return false;
     case QuantityKind::JointDamping:
+    case QuantityKind::FlexibleDamping:
       if (value >= 0.0) return true;
       why = "expected damping >= 0";
       return false;

@@ -70,6 +70,7 @@ int main(int argc, char** argv) {
       std::cerr << scenePath << ": " << e.what() << "\n";
       return 1;
     }
+    for (const std::string& note : scene.notes) std::cout << "mfbd-pack: " << note << "\n";
     const std::string id = scene.name;
     const auto table = mfbd::variableTable(scene);
     mfbd::Capabilities caps;

@@ -80,7 +80,7 @@ std::vector<Variable> variableTable(const Scene& scene) {
         scene.solver.rhoInf);
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
-    if (jointDofs(jt.type) == 0) continue;
+    if (jointDofs(jt.type) == 0 || jt.cut) continue;
     const bool rotational = jt.type == JointType::Revolute;
     t.add(jt.name + ".damping", P, Variability::Tunable, rotational ? "N.m.s/rad" : "",
           "viscous damping per joint DOF", {QK::JointDamping, j}, jt.damping);
@@ -136,7 +136,7 @@ std::vector<Variable> variableTable(const Scene& scene) {
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
     if (!selected(scene.outputs.allJoints, scene.outputs.joints, jt.name)) continue;
-    const auto names = jointCoordinateNames(jt.type);
+    const auto names = jt.cut ? std::vector<std::string>() : jointCoordinateNames(jt.type);
     for (int d = 0; d < int(names.size()); ++d) {
       const bool angular = isAngle(names[d]);
       t.output(jt.name + "." + names[d], angular ? "rad" : "m", "joint coordinate", {QK::JointCoordinate, j, d});

@@ -81,18 +81,25 @@ AdvanceResult Simulation::doStep(double H) {
   return result;
 }
 
-// Outputs of the state at the current time. When inputs changed after the
-// step, accelerations (and so reactions) are those of the new inputs; the
-// integrator's own history is left untouched.
+// Outputs of the state at the current time. Accelerations and multipliers
+// (so the reactions) are solved consistently for the state (q, v) when
+// there are constraints (index-3 generalized-alpha satisfies them only at
+// position level) or when inputs changed after the step; the integrator's
+// own history is left untouched.
 void Simulation::evaluateOutputs() {
   if (outputsCurrent_) return;
-  VectorXd vdot = state_.vdot;
-  if (inputsChangedSinceStep_ && scene_.analysis == Analysis::Dynamic) {
+  VectorXd vdot = state_.vdot, lambda = state_.lambda;
+  const bool constrained = system_.constraintCount() > 0;
+  if ((inputsChangedSinceStep_ || constrained) && scene_.analysis == Analysis::Dynamic) {
     IntegratorState probe = state_;
     std::string message;
-    if (stepper_->initialize(system_, probe, message)) vdot = probe.vdot;
+    if (stepper_->initialize(system_, probe, message)) {
+      vdot = probe.vdot;
+      lambda = probe.lambda;
+    }
   }
-  system_.evaluate(state_.t, state_.q, state_.v, vdot);
+  system_.evaluate(state_.t, state_.q, state_.v, vdot, lambda);
+  outputLambda_ = lambda;
   outputsCurrent_ = true;
 }
 
@@ -129,7 +136,8 @@ double Simulation::read(const Quantity& q) {
       return logSO3(state_.q.rotations[j.rotation])[q.component - scalars];
     }
     Vec3 force, torque;
-    jointReaction(model, data, k, force, torque);
+    if (j.cut) system_.cutJointReaction(k, outputLambda_, force, torque);
+    else jointReaction(model, data, k, force, torque);
     return q.kind == QuantityKind::JointReactionForce ? force[q.component] : torque[q.component];
   }
   const int b = bodyIndex_[q.index];

@@ -73,6 +73,7 @@ class Simulation {
   IntegratorState state_;
   std::vector<int> bodyIndex_, jointIndex_;  // scene order -> model order
   std::vector<Quat> orientation_;            // sign-continuous across steps: scene bodies, then mesh nodes
+  VectorXd outputLambda_;  // multipliers of the evaluated outputs
   bool outputsCurrent_ = false;
   bool inputsChangedSinceStep_ = false;
 };

@@ -2,6 +2,7 @@
 
 #include <limits>
 
+#include "coupling/joint_constraint.hpp"
 #include "rigid/recursive_dynamics.hpp"
 
 namespace mfbd {
@@ -32,22 +33,63 @@ void System::jointForces(const VectorXd& v, VectorXd& tau) const {
   }
 }
 
-void System::rigidResidual(const Configuration& q, const VectorXd& v, const VectorXd& vdot, VectorXd& r) {
+namespace {
+
+JointConstraint constraintOf(const Joint& j) {
+  return {j.type, {j.parentMarker.position, j.parentMarker.orientation},
+          {j.childMarker.position, j.childMarker.orientation}};
+}
+
+// Pose of a body's centre-of-mass frame; ground is the identity.
+BodyPose poseOf(const Data& data, int body) {
+  if (body == kGroundIndex) return {Vec3::Zero(), Mat3::Identity()};
+  return {data.body[body].position, data.body[body].orientation};
+}
+
+BodyTwist twistOf(const Data& data, int body) {
+  if (body == kGroundIndex) return {Vec3::Zero(), Vec3::Zero()};
+  return {data.body[body].velocity, data.body[body].angularVelocity};
+}
+
+}  // namespace
+
+// Joint-space residual B^T (M Ydot - Q + Phi_Z^T lambda) - tau: the cut
+// joints' forces -Phi_Z^T lambda enter the backward loop as applied wrenches.
+void System::rigidResidual(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
+                           VectorXd& r, VectorXd& phi) {
   forwardKinematics(model_, data_, q, v, vdot);
   for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
     data_.appliedForce[i] = model_.bodies[i].mass * model_.gravity;
     data_.appliedTorque[i].setZero();
+  }
+  phi.setZero(model_.constraintCount);
+  for (const Joint& j : model_.joints) {
+    if (!j.cut) continue;
+    const int parent = j.parentMarker.body, child = j.childMarker.body;
+    const ConstraintEvaluation c = evaluateJointConstraint(constraintOf(j), poseOf(data_, parent), poseOf(data_, child));
+    const int m = int(c.phi.size());
+    phi.segment(j.constraintOffset, m) = c.phi;
+    if (lambda.size() == 0) continue;
+    const auto l = lambda.segment(j.constraintOffset, m);
+    const Vec6 onChild = -c.jacobianChild.transpose() * l;
+    data_.appliedForce[child] += onChild.head<3>();
+    data_.appliedTorque[child] += onChild.tail<3>();
+    if (parent != kGroundIndex) {
+      const Vec6 onParent = -c.jacobianParent.transpose() * l;
+      data_.appliedForce[parent] += onParent.head<3>();
+      data_.appliedTorque[parent] += onParent.tail<3>();
+    }
   }
   jointForces(v, tau_);
   backwardNewtonEuler(model_, data_, tau_, r);
 }
 
 void System::residual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
-                      const VectorXd& /*lambda*/, VectorXd& r, VectorXd& phi) {
+                      const VectorXd& lambda, VectorXd& r, VectorXd& phi) {
   r.setZero(model_.velocityCount);
   phi.resize(0);
   if (!model_.bodies.empty()) {
-    rigidResidual(q, v, vdot, rigid_);
+    rigidResidual(q, v, vdot, lambda, rigid_, phi);
     r.head(model_.rigidVelocityCount) = rigid_;
   }
   if (!model_.flexible.empty()) {
@@ -61,15 +103,26 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
 // Mass block analytic (B^T M B); velocity and configuration derivatives by
 // finite differences of the rigid residual, for now. Every entry of the
 // block is emitted, zeros included, so the sparsity pattern never changes.
-void System::rigidTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot, double cM, double cC,
-                          double cK, Triplets& iteration) {
+void System::rigidTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
+                          double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian) {
   const int n = model_.rigidVelocityCount;
   forwardKinematics(model_, data_, q, v, vdot);
   computeVelocityTransformation(model_, data_);
   Eigen::MatrixXd S = cM * jointSpaceMassMatrix(model_, data_);
+  // Constraint rows Phi_q = Phi_Z B (dense over the joint rates: a stable pattern).
+  const Eigen::MatrixXd& B = data_.velocityTransformation;
+  for (const Joint& j : model_.joints) {
+    if (!j.cut) continue;
+    const int parent = j.parentMarker.body, child = j.childMarker.body;
+    const ConstraintEvaluation c = evaluateJointConstraint(constraintOf(j), poseOf(data_, parent), poseOf(data_, child));
+    Eigen::MatrixXd rows = c.jacobianChild * B.middleRows<6>(6 * child);
+    if (parent != kGroundIndex) rows += c.jacobianParent * B.middleRows<6>(6 * parent);
+    for (int col = 0; col < n; ++col)
+      for (int i = 0; i < rows.rows(); ++i) constraintJacobian.emplace_back(j.constraintOffset + i, col, rows(i, col));
+  }
   if (cC != 0.0 || cK != 0.0) {
-    VectorXd r0, r1;
-    rigidResidual(q, v, vdot, r0);
+    VectorXd r0, r1, phi;
+    rigidResidual(q, v, vdot, lambda, r0, phi);
     const double eps = 1e-7;
     for (int i = 0; i < n; ++i) {
       // Perturb q by eps e_i and v by (cC/cK) eps e_i: (r1 - r0)/eps = K e_i + (cC/cK) C e_i.
@@ -83,7 +136,7 @@ void System::rigidTangent(const Configuration& q, const VectorXd& v, const Vecto
       } else {
         vp[i] += eps;
       }
-      rigidResidual(qp, vp, vdot, r1);
+      rigidResidual(qp, vp, vdot, lambda, r1, phi);
       S.col(i) += (cK != 0.0 ? cK : cC) * (r1 - r0) / eps;
     }
   }
@@ -92,9 +145,9 @@ void System::rigidTangent(const Configuration& q, const VectorXd& v, const Vecto
 }
 
 void System::tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
-                     const VectorXd& /*lambda*/, double cM, double cC, double cK, Triplets& iteration,
-                     Triplets& /*constraintJacobian*/) {
-  if (!model_.bodies.empty()) rigidTangent(q, v, vdot, cM, cC, cK, iteration);
+                     const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
+                     Triplets& constraintJacobian) {
+  if (!model_.bodies.empty()) rigidTangent(q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
   if (!model_.flexible.empty()) {
     flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
     const bool inertia = model_.analysis == Analysis::Dynamic;
@@ -103,9 +156,42 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
   }
 }
 
-void System::evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot) {
+// gamma = Phi_Z (Bdot qdot) + (Phidot_Z Y): the bias accelerations of the
+// forward loop at qddot = 0, plus the constraints' own velocity terms.
+VectorXd System::constraintAccelerationTerm(double /*t*/, const Configuration& q, const VectorXd& v) {
+  VectorXd gamma = VectorXd::Zero(model_.constraintCount);
+  forwardKinematics(model_, data_, q, v, VectorXd::Zero(model_.velocityCount));
+  for (const Joint& j : model_.joints) {
+    if (!j.cut) continue;
+    const int parent = j.parentMarker.body, child = j.childMarker.body;
+    const JointConstraint jc = constraintOf(j);
+    const ConstraintEvaluation c = evaluateJointConstraint(jc, poseOf(data_, parent), poseOf(data_, child));
+    auto bias = [&](int b) {
+      Vec6 a = Vec6::Zero();
+      if (b != kGroundIndex) a << data_.body[b].acceleration, data_.body[b].angularAcceleration;
+      return a;
+    };
+    gamma.segment(j.constraintOffset, c.phi.size()) =
+        c.jacobianChild * bias(child) + c.jacobianParent * bias(parent) +
+        mfbd::constraintAccelerationTerm(jc, poseOf(data_, parent), twistOf(data_, parent), poseOf(data_, child),
+                                    twistOf(data_, child));
+  }
+  return gamma;
+}
+
+void System::cutJointReaction(int joint, const VectorXd& lambda, Vec3& force, Vec3& torque) const {
+  const Joint& j = model_.joints[joint];
+  const JointReaction r = constraintReaction(constraintOf(j), poseOf(data_, j.parentMarker.body),
+                                             poseOf(data_, j.childMarker.body),
+                                             lambda.segment(j.constraintOffset, mfbd::constraintCount(j.type)));
+  force = r.force;
+  torque = r.torque;
+}
+
+void System::evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+                      const VectorXd& lambda) {
   VectorXd r, phi;
-  residual(t, q, v, vdot, VectorXd(), r, phi);
+  residual(t, q, v, vdot, lambda, r, phi);
 }
 
 }  // namespace mfbd

@@ -30,21 +30,27 @@ class System : public Dynamics {
   void endStep(double t);
 
   int velocityCount() const override { return model_.velocityCount; }
-  int constraintCount() const override { return 0; }
+  int constraintCount() const override { return model_.constraintCount; }
   void retract(Configuration& q, const VectorXd& dq) const override;
   void residual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                 VectorXd& r, VectorXd& phi) override;
   void tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian) override;
+  VectorXd constraintAccelerationTerm(double t, const Configuration& q, const VectorXd& v) override;
+
+  // Force and torque a cut joint passes to its child (child marker frame,
+  // about its origin), from the multipliers (after evaluate()).
+  void cutJointReaction(int joint, const VectorXd& lambda, Vec3& force, Vec3& torque) const;
 
   // Kinematics, joint reactions and node states of a state into data() and
   // nodes() (for outputs).
-  void evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot);
+  void evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda);
 
  private:
-  void rigidResidual(const Configuration& q, const VectorXd& v, const VectorXd& vdot, VectorXd& r);
-  void rigidTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot, double cM, double cC,
-                    double cK, Triplets& iteration);
+  void rigidResidual(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
+                     VectorXd& r, VectorXd& phi);
+  void rigidTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
+                    double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
   void jointForces(const VectorXd& v, VectorXd& tau) const;
 
   Model model_;

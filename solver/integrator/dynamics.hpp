@@ -23,6 +23,8 @@ class Dynamics {
   virtual void retract(Configuration& q, const VectorXd& dq) const = 0;
   virtual void residual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                         const VectorXd& lambda, VectorXd& r, VectorXd& phi) = 0;
+  // gamma with d2/dt2 Phi = Phi_q vdot + gamma (for consistent accelerations).
+  virtual VectorXd constraintAccelerationTerm(double t, const Configuration& q, const VectorXd& v) = 0;
   // Appends cM M + cC dr/dv + cK dr/dq (derivative along the retraction) to
   // `iteration`, and Phi_q to `constraintJacobian` (rows from 0).
   virtual void tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,

@@ -17,16 +17,14 @@ namespace {
 bool allFinite(const VectorXd& x) { return x.allFinite(); }
 }  // namespace
 
+// Consistent start: [M Phi_q^T; Phi_q 0] [vdot; lambda] = [-r(vdot = 0, lambda = 0); -gamma].
 bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std::string& message) {
   const int n = system.velocityCount(), m = system.constraintCount();
-  if (m != 0) {
-    message = "consistent initial accelerations with constraints are not implemented yet";
-    return false;
-  }
   state.vdot = VectorXd::Zero(n);
   state.lambda = VectorXd::Zero(m);
-  VectorXd r, phi;
+  VectorXd r, phi, rhs(n + m);
   system.residual(state.t, state.q, state.v, state.vdot, state.lambda, r, phi);
+  rhs << -r, (m > 0 ? VectorXd(-system.constraintAccelerationTerm(state.t, state.q, state.v)) : VectorXd());
   LinearSolver mass;
   const SparseMatrix S = iterationMatrix(system, state, 1.0, 0.0, 0.0);
   mass.analyzePattern(S);
@@ -34,9 +32,17 @@ bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std:
     message = "the mass matrix is singular at the initial configuration";
     return false;
   }
-  state.vdot = -mass.solve(r);
+  VectorXd x = mass.solve(rhs);
+  if (m > 0) {
+    // Iterative refinement against the unregularised matrix removes the
+    // regularisation's error from the multipliers (they are reaction outputs).
+    const SparseMatrix exact = iterationMatrix(system, state, 1.0, 0.0, 0.0, false);
+    for (int sweep = 0; sweep < 3; ++sweep) x += mass.solve(rhs - exact * x);
+  }
+  state.vdot = x.head(n);
+  state.lambda = x.tail(m);
   state.a = state.vdot;
-  if (!allFinite(state.vdot)) {
+  if (!allFinite(state.vdot) || !allFinite(state.lambda)) {
     message = "initial accelerations are not finite";
     return false;
   }
@@ -104,7 +110,8 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     trial.vdot += betaPrime * delta.head(n);
     trial.a += aPerVdot * betaPrime * delta.head(n);
     trial.lambda += betaPrime * delta.tail(m);
-    if (size <= options_.tolerance) {
+    // Converged: corrections and constraint violation below the tolerance.
+    if (size <= options_.tolerance && (m == 0 || phi.cwiseAbs().maxCoeff() <= options_.tolerance)) {
       trial.substeps = s.substeps + 1;
       trial.newtonIterations = s.newtonIterations;
       trial.factorizations = s.factorizations;

@@ -61,7 +61,7 @@ bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, std::string&
     }
     system.retract(s.q, delta.head(n));
     s.lambda += delta.tail(m);
-    if (size <= options_.tolerance) return true;
+    if (size <= options_.tolerance && (m == 0 || phi.cwiseAbs().maxCoeff() <= options_.tolerance)) return true;
   }
   std::ostringstream msg;
   msg << "Newton did not reach equilibrium in " << options_.maxIterations << " iterations";

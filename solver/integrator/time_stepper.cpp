@@ -1,12 +1,13 @@
 #include "integrator/time_stepper.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
 namespace mfbd {
 
 SparseMatrix TimeStepper::iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC,
-                                          double cK) {
+                                          double cK, bool regularize) {
   const int n = system.velocityCount(), m = system.constraintCount();
   Triplets all, jacobian;
   system.tangent(at.t, at.q, at.v, at.vdot, at.lambda, cM, cC, cK, all, jacobian);
@@ -16,7 +17,20 @@ SparseMatrix TimeStepper::iterationMatrix(Dynamics& system, const IntegratorStat
     all.emplace_back(t.col(), n + t.row(), t.value());
   }
   // Every diagonal entry structurally present: the pattern stays the same.
-  for (int i = 0; i < n + m; ++i) all.emplace_back(i, i, 0.0);
+  for (int i = 0; i < n; ++i) all.emplace_back(i, i, 0.0);
+  // The constraint block gets -eps I, eps a 1e-8 fraction of the Schur
+  // complement's scale |Phi_q|^2 / |S|: redundant constraints (Bricard) and
+  // configurations where the constraint rank drops (a four-bar passing its
+  // singular position) keep a solvable matrix; Newton still converges to
+  // the exact constraints since the residual is exact.
+  if (m > 0) {
+    double sMax = 0.0, gMax = 0.0;
+    for (const auto& t : all)
+      if (t.row() == t.col() && t.row() < n) sMax = std::max(sMax, std::abs(t.value()));
+    for (const auto& t : jacobian) gMax = std::max(gMax, std::abs(t.value()));
+    const double eps = !regularize ? 0.0 : sMax > 0.0 ? 1e-8 * gMax * gMax / sMax : 1e-8;
+    for (int i = n; i < n + m; ++i) all.emplace_back(i, i, -eps);
+  }
   SparseMatrix S(n + m, n + m);
   S.setFromTriplets(all.begin(), all.end());
   S.makeCompressed();

@@ -47,8 +47,10 @@ class TimeStepper {
   virtual bool substep(Dynamics& system, IntegratorState& s, double h, std::string& why) = 0;
   virtual void beginAdvance() {}
 
-  // The Newton matrix [S Phi_q^T; Phi_q 0] from the system's tangent.
-  static SparseMatrix iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK);
+  // The Newton matrix [S Phi_q^T; Phi_q -eps I] from the system's tangent
+  // (eps = 0 with regularize false).
+  static SparseMatrix iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
+                                      bool regularize = true);
 
   SolverOptions options_;
 };

@@ -4,6 +4,7 @@
 #include <deque>
 #include <map>
 
+#include "coupling/joint_constraint.hpp"
 #include "model/model.hpp"
 #include "scene/joint_dofs.hpp"
 
@@ -106,11 +107,6 @@ Model assemble(const Scene& scene) {
     if (scene.joints[i].cut) cutJoints.push_back(i);
     else jointOrder[bodyIndex.at(scene.joints[i].child)] = i;
   }
-  if (!cutJoints.empty()) {
-    const int i = cutJoints.front();
-    throw SceneError("joints[" + std::to_string(i) + "].cut",
-                     "joint '" + scene.joints[i].name + "': cut joints (closed loops) are not implemented yet");
-  }
   for (int sceneIndex : jointOrder) {
     const JointSpec& spec = scene.joints[sceneIndex];
     Joint j;
@@ -127,6 +123,22 @@ Model assemble(const Scene& scene) {
     layOutCoordinates(model, j, spec);
     model.bodies[child].parent = parent;
     model.bodies[child].inboardJoint = int(model.joints.size());
+    model.joints.push_back(j);
+  }
+  // Cut joints close loops: constraint rows with Lagrange multipliers.
+  for (int sceneIndex : cutJoints) {
+    const JointSpec& spec = scene.joints[sceneIndex];
+    Joint j;
+    j.name = spec.name;
+    j.type = spec.type;
+    j.dofs = int(jointDofs(spec.type));
+    j.cut = true;
+    const WorldFrame jointFrame{spec.position, frameFromZAxis(spec.axis)};
+    const int parent = indexOf(spec.parent), child = indexOf(spec.child);
+    j.parentMarker = markerOn(parent, frameOf(parent), jointFrame);
+    j.childMarker = markerOn(child, frameOf(child), jointFrame);
+    j.constraintOffset = model.constraintCount;
+    model.constraintCount += constraintCount(spec.type);
     model.joints.push_back(j);
   }
   model.rigidVelocityCount = model.velocityCount;

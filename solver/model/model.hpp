@@ -46,6 +46,7 @@ struct Joint {
   bool actuated = false;   // generalized force input along its DOFs
   int inputOffset = -1;    // into the joint-force input vector
   double damping = 0.0;    // tunable
+  int constraintOffset = -1;  // cut joints: first row in Phi (and lambda)
 };
 
 struct Model {
@@ -60,6 +61,7 @@ struct Model {
   int rigidVelocityCount = 0;   // joint rates come first in v, then flexible nodes
   int velocityCount = 0;
   int jointInputCount = 0;
+  int constraintCount = 0;      // rows of Phi: cut joints
   Configuration initialConfiguration;
   VectorXd initialVelocity;
 };

@@ -203,6 +203,7 @@ void parseSelection(const Field& f, bool& all, std::vector<std::string>& names) 
 
 }  // namespace
 
+void chooseCutJoints(Scene& scene);      // validate.cpp
 void validateScene(const Scene& scene);  // validate.cpp
 FlexibleBodySpec parseFlexibleBody(const Field& f, const std::map<std::string, double>& params);  // parse_flexible.cpp
 
@@ -256,6 +257,7 @@ Scene parseScene(const std::string& text, const std::map<std::string, double>& p
     if (out.has("bodies")) parseSelection(out.at("bodies"), scene.outputs.allBodies, scene.outputs.bodies);
     if (out.has("joints")) parseSelection(out.at("joints"), scene.outputs.allJoints, scene.outputs.joints);
   }
+  chooseCutJoints(scene);
   validateScene(scene);
   return scene;
 }

@@ -141,6 +141,9 @@ struct Scene {
   // Static: each step solves equilibrium at the loads of its end time (load
   // stepping with Newton; halving on failure), no inertia.
   Analysis analysis = Analysis::Dynamic;
+  // What parsing decided for the user (e.g. which joints it cut to open
+  // loops), for the packer's output and the FMU's log.
+  std::vector<std::string> notes;
 };
 
 // One bad-input error: where (a JSON path such as "joints[1].axis") and what

@@ -50,6 +50,12 @@ void checkJoint(const Scene& scene, std::size_t i, const std::set<std::string>& 
                                                   std::to_string(j.initialRates.size()));
   if (j.torqueInput && n == 0)
     throw SceneError(path + ".actuated", "a fixed joint has no coordinate to actuate");
+  if (j.cut && j.torqueInput)
+    throw SceneError(path + ".actuated", "joint '" + j.name + "' is a cut joint: it has no coordinates to actuate");
+  if (j.cut && j.damping != 0.0)
+    throw SceneError(path + ".damping", "joint '" + j.name + "' is a cut joint: it has no coordinates to damp");
+  if (j.cut && (!j.initialCoordinates.empty() || !j.initialRates.empty()))
+    throw SceneError(path + ".initial", "joint '" + j.name + "' is a cut joint: it has no coordinates of its own");
 }
 
 // Every body is the child of exactly one tree (non-cut) joint, and following
@@ -92,6 +98,20 @@ void checkOutputs(const Scene& scene, const std::set<std::string>& bodies) {
 }
 
 }  // namespace
+
+// A body that is the child of several joints none of which is declared cut
+// keeps its first as the tree joint; the others are cut (a closed loop), and
+// the choice is noted for the log.
+void chooseCutJoints(Scene& scene) {
+  std::set<std::string> hasParent;
+  for (JointSpec& j : scene.joints) {
+    if (j.cut) continue;
+    if (!hasParent.insert(j.child).second) {
+      j.cut = true;
+      scene.notes.push_back("joint '" + j.name + "' closes a loop at body '" + j.child + "': cut (Lagrange multipliers)");
+    }
+  }
+}
 
 void validateScene(const Scene& scene) {
   if (scene.bodies.empty() && scene.flexibleBodies.empty())

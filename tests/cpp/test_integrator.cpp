@@ -22,6 +22,7 @@ class Oscillator : public Dynamics {
     r = vdot + w2_ * q.scalars;
     phi.resize(0);
   }
+  VectorXd constraintAccelerationTerm(double, const Configuration&, const VectorXd&) override { return {}; }
   void tangent(double, const Configuration&, const VectorXd&, const VectorXd&, const VectorXd&, double cM, double,
                double cK, Triplets& S, Triplets&) override {
     S.emplace_back(0, 0, cM + cK * w2_);
