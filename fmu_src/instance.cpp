@@ -139,11 +139,13 @@ bool Instance::buildSimulation(const char* function) {
   for (std::size_t i = 0; i < table_.size(); ++i)
     if (table_[i].causality == Causality::Input) simulation_->write(table_[i].quantity, values_[i]);
   std::string message;
-  if (!simulation_->initialize(startTime_, message)) {
+  std::vector<std::string> notes;
+  if (!simulation_->initialize(startTime_, message, &notes)) {
     fail(function, "initialization failed: " + message);
     simulation_.reset();
     return false;
   }
+  for (const std::string& note : notes) log(fmi2OK, "logEvents", note);
   simulationStale_ = false;
   lastSuccessfulTime_ = startTime_;
   return true;

@@ -130,7 +130,8 @@ void writeStructure(std::ostream& x, const std::vector<Variable>& table) {
   for (std::size_t i = 0; i < table.size(); ++i) {
     if (table[i].causality != Causality::Output) continue;
     const QuantityKind k = table[i].quantity.kind;
-    const bool feedthrough = k == QuantityKind::JointReactionForce || k == QuantityKind::JointReactionTorque;
+    const bool feedthrough = k == QuantityKind::JointReactionForce || k == QuantityKind::JointReactionTorque ||
+                             k == QuantityKind::JointDriveForce;
     x << "      <Unknown index=\"" << i + 1 << "\" dependencies=\"" << (feedthrough ? inputs : "") << "\"/>\n";
   }
   x << "    </Outputs>\n    <InitialUnknowns>\n";

@@ -142,6 +142,11 @@ std::vector<Variable> variableTable(const Scene& scene) {
       t.output(jt.name + "." + names[d], angular ? "rad" : "m", "joint coordinate", {QK::JointCoordinate, j, d});
       t.output(jt.name + "." + names[d] + "_rate", angular ? "rad/s" : "m/s", "joint rate", {QK::JointRate, j, d});
     }
+    if (jt.driven) {
+      const bool angular = isAngle(names[0]);
+      t.output(jt.name + (angular ? ".drive_torque" : ".drive_force"), angular ? "N.m" : "N",
+               "generalized force the drive applies along its coordinate", {QK::JointDriveForce, j});
+    }
     for (int c = 0; c < 3; ++c)
       t.output(jt.name + ".reaction_force." + kAxes[c], "N",
                "force of the parent on the child, child marker frame", {QK::JointReactionForce, j, c});

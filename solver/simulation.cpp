@@ -1,5 +1,6 @@
 #include "simulation.hpp"
 
+#include "coupling/joint_constraint.hpp"
 #include "integrator/generalized_alpha.hpp"
 #include "integrator/static_equilibrium.hpp"
 #include "rigid/recursive_dynamics.hpp"
@@ -42,9 +43,73 @@ Simulation::Simulation(const Scene& scene)
   state_.v = model.initialVelocity;
 }
 
-bool Simulation::initialize(double t0, std::string& message) {
+std::string Simulation::constraintOwner(int row) const {
+  for (const Joint& j : system_.model().joints)
+    if (j.constraintOffset >= 0 && row >= j.constraintOffset &&
+        row < j.constraintOffset + (j.driven ? 1 : constraintCount(j.type)))
+      return std::string(j.driven ? "drive of joint '" : "cut joint '") + j.name + "'";
+  return "constraint row " + std::to_string(row);
+}
+
+// Least-change projection: q <- q o exp(-J^T (J J^T)^-1 Phi) until Phi = 0,
+// then v <- v - J^T (J J^T)^-1 (J v + Phi_t). J J^T gets a tiny ridge so
+// redundant rows (a planar loop in 3D) do not make it singular.
+bool Simulation::assembleConstraints(std::string& message, std::vector<std::string>* notes) {
+  const int n = system_.velocityCount(), m = system_.constraintCount();
+  if (m == 0) return true;
+  const double tol = scene_.solver.tolerance;
+  auto jacobian = [&](const Configuration& q, const VectorXd& v) {
+    Triplets S, G;
+    system_.tangent(state_.t, q, v, VectorXd::Zero(n), VectorXd::Zero(m), 0.0, 0.0, 0.0, S, G);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, n);
+    for (const auto& e : G) J(e.row(), e.col()) += e.value();
+    return J;
+  };
+  auto constraints = [&](const Configuration& q, double t) {
+    VectorXd r, phi;
+    system_.residual(t, q, state_.v, VectorXd::Zero(n), VectorXd::Zero(m), r, phi);
+    return phi;
+  };
+  auto leastChange = [&](const Eigen::MatrixXd& J, const VectorXd& rhs) {
+    Eigen::MatrixXd JJt = J * J.transpose();
+    JJt.diagonal().array() += 1e-12 * std::max(1.0, JJt.diagonal().maxCoeff());
+    return VectorXd(J.transpose() * JJt.ldlt().solve(rhs));
+  };
+  const Configuration start = state_.q;
+  VectorXd phi = constraints(state_.q, state_.t);
+  for (int k = 0; k < 50 && phi.cwiseAbs().maxCoeff() > tol; ++k) {
+    system_.retract(state_.q, -leastChange(jacobian(state_.q, state_.v), phi));
+    phi = constraints(state_.q, state_.t);
+  }
+  int worst;
+  if (phi.cwiseAbs().maxCoeff(&worst) > tol) {
+    message = "cannot assemble the mechanism: " + constraintOwner(worst) + " is violated by " +
+              std::to_string(std::abs(phi[worst])) + " after projection (is the loop closable?)";
+    return false;
+  }
+  const double dt = 1e-6 * std::max(1.0, std::abs(state_.t));
+  const VectorXd phiRate = (constraints(state_.q, state_.t + dt) - constraints(state_.q, state_.t - dt)) / (2 * dt);
+  const Eigen::MatrixXd J = jacobian(state_.q, state_.v);
+  const VectorXd dv = -leastChange(J, J * state_.v + phiRate);
+  state_.v += dv;
+  if (notes) {
+    for (const Joint& j : system_.model().joints) {
+      if (j.cut || j.dofs == 0 || j.scalarOffset < 0) continue;
+      const double moved = (state_.q.scalars - start.scalars).segment(j.scalarOffset, j.rotation >= 0 ? j.dofs - 3 : j.dofs)
+                               .cwiseAbs().maxCoeff();
+      const double rate = dv.segment(j.velocityOffset, j.dofs).cwiseAbs().maxCoeff();
+      if (moved > tol || rate > tol)
+        notes->push_back("assembly moved joint '" + j.name + "' by " + std::to_string(moved) +
+                         " and its rate by " + std::to_string(rate));
+    }
+  }
+  return true;
+}
+
+bool Simulation::initialize(double t0, std::string& message, std::vector<std::string>* notes) {
   state_.t = t0;
   system_.endStep(t0);
+  if (!assembleConstraints(message, notes)) return false;
   if (!stepper_->initialize(system_, state_, message)) return false;
   outputsCurrent_ = false;
   evaluateOutputs();
@@ -125,6 +190,8 @@ double Simulation::read(const Quantity& q) {
   evaluateOutputs();
   if (q.kind >= QuantityKind::NodePosition) return readFlexible(q);
   const Data& data = system_.data();
+  if (q.kind == QuantityKind::JointDriveForce)
+    return -outputLambda_[model.joints[jointIndex_[q.index]].constraintOffset];
   if (q.kind == QuantityKind::JointCoordinate || q.kind == QuantityKind::JointRate ||
       q.kind == QuantityKind::JointReactionForce || q.kind == QuantityKind::JointReactionTorque) {
     const int k = jointIndex_[q.index];

@@ -21,6 +21,7 @@ enum class QuantityKind {
   JointRate,
   JointReactionForce,   // component 0..2, child marker frame
   JointReactionTorque,  // about the child marker origin
+  JointDriveForce,      // generalized force of a drive along its coordinate
   BodyPosition,         // user body frame origin, world
   BodyOrientation,      // quaternion w, x, y, z (body -> world)
   BodyVelocity,
@@ -48,8 +49,11 @@ class Simulation {
  public:
   explicit Simulation(const Scene& scene);  // throws SceneError
 
-  // Consistent initial accelerations at time t0; false with a message.
-  bool initialize(double t0, std::string& message);
+  // Assembles closed loops and drives at time t0 (positions, then
+  // velocities, projected onto the constraints by least change), then
+  // consistent initial accelerations. False with a message naming the joint
+  // whose constraint cannot be met; `notes` says what assembly moved.
+  bool initialize(double t0, std::string& message, std::vector<std::string>* notes = nullptr);
   // Advances to t + H; on failure keeps the state of the step start.
   AdvanceResult doStep(double H);
 
@@ -65,6 +69,8 @@ class Simulation {
   void evaluateOutputs();
 
   void updateQuaternions(bool reset);
+  bool assembleConstraints(std::string& message, std::vector<std::string>* notes);
+  std::string constraintOwner(int row) const;
   double readFlexible(const Quantity& q);
 
   const Scene scene_;

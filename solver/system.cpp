@@ -55,8 +55,8 @@ BodyTwist twistOf(const Data& data, int body) {
 
 // Joint-space residual B^T (M Ydot - Q + Phi_Z^T lambda) - tau: the cut
 // joints' forces -Phi_Z^T lambda enter the backward loop as applied wrenches.
-void System::rigidResidual(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
-                           VectorXd& r, VectorXd& phi) {
+void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+                           const VectorXd& lambda, VectorXd& r, VectorXd& phi) {
   forwardKinematics(model_, data_, q, v, vdot);
   for (std::size_t i = 0; i < model_.bodies.size(); ++i) {
     data_.appliedForce[i] = model_.bodies[i].mass * model_.gravity;
@@ -82,6 +82,12 @@ void System::rigidResidual(const Configuration& q, const VectorXd& v, const Vect
   }
   jointForces(v, tau_);
   backwardNewtonEuler(model_, data_, tau_, r);
+  // Drives: coordinate - drive(t) = 0; the multiplier acts along the DOF.
+  for (const Joint& j : model_.joints) {
+    if (!j.driven) continue;
+    phi[j.constraintOffset] = q.scalars[j.scalarOffset] - j.drive(t);
+    if (lambda.size() > 0) r[j.velocityOffset] += lambda[j.constraintOffset];
+  }
 }
 
 void System::residual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
@@ -89,7 +95,7 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
   r.setZero(model_.velocityCount);
   phi.resize(0);
   if (!model_.bodies.empty()) {
-    rigidResidual(q, v, vdot, lambda, rigid_, phi);
+    rigidResidual(t, q, v, vdot, lambda, rigid_, phi);
     r.head(model_.rigidVelocityCount) = rigid_;
   }
   if (!model_.flexible.empty()) {
@@ -103,8 +109,9 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
 // Mass block analytic (B^T M B); velocity and configuration derivatives by
 // finite differences of the rigid residual, for now. Every entry of the
 // block is emitted, zeros included, so the sparsity pattern never changes.
-void System::rigidTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
-                          double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian) {
+void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+                          const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
+                          Triplets& constraintJacobian) {
   const int n = model_.rigidVelocityCount;
   forwardKinematics(model_, data_, q, v, vdot);
   computeVelocityTransformation(model_, data_);
@@ -112,6 +119,9 @@ void System::rigidTangent(const Configuration& q, const VectorXd& v, const Vecto
   // Constraint rows Phi_q = Phi_Z B (dense over the joint rates: a stable pattern).
   const Eigen::MatrixXd& B = data_.velocityTransformation;
   for (const Joint& j : model_.joints) {
+    if (j.driven)
+      for (int col = 0; col < n; ++col)
+        constraintJacobian.emplace_back(j.constraintOffset, col, col == j.velocityOffset ? 1.0 : 0.0);
     if (!j.cut) continue;
     const int parent = j.parentMarker.body, child = j.childMarker.body;
     const ConstraintEvaluation c = evaluateJointConstraint(constraintOf(j), poseOf(data_, parent), poseOf(data_, child));
@@ -122,7 +132,7 @@ void System::rigidTangent(const Configuration& q, const VectorXd& v, const Vecto
   }
   if (cC != 0.0 || cK != 0.0) {
     VectorXd r0, r1, phi;
-    rigidResidual(q, v, vdot, lambda, r0, phi);
+    rigidResidual(t, q, v, vdot, lambda, r0, phi);
     const double eps = 1e-7;
     for (int i = 0; i < n; ++i) {
       // Perturb q by eps e_i and v by (cC/cK) eps e_i: (r1 - r0)/eps = K e_i + (cC/cK) C e_i.
@@ -136,7 +146,7 @@ void System::rigidTangent(const Configuration& q, const VectorXd& v, const Vecto
       } else {
         vp[i] += eps;
       }
-      rigidResidual(qp, vp, vdot, lambda, r1, phi);
+      rigidResidual(t, qp, vp, vdot, lambda, r1, phi);
       S.col(i) += (cK != 0.0 ? cK : cC) * (r1 - r0) / eps;
     }
   }
@@ -147,7 +157,7 @@ void System::rigidTangent(const Configuration& q, const VectorXd& v, const Vecto
 void System::tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                      const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                      Triplets& constraintJacobian) {
-  if (!model_.bodies.empty()) rigidTangent(q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
+  if (!model_.bodies.empty()) rigidTangent(t, q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
   if (!model_.flexible.empty()) {
     flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
     const bool inertia = model_.analysis == Analysis::Dynamic;
@@ -158,10 +168,11 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
 
 // gamma = Phi_Z (Bdot qdot) + (Phidot_Z Y): the bias accelerations of the
 // forward loop at qddot = 0, plus the constraints' own velocity terms.
-VectorXd System::constraintAccelerationTerm(double /*t*/, const Configuration& q, const VectorXd& v) {
+VectorXd System::constraintAccelerationTerm(double t, const Configuration& q, const VectorXd& v) {
   VectorXd gamma = VectorXd::Zero(model_.constraintCount);
   forwardKinematics(model_, data_, q, v, VectorXd::Zero(model_.velocityCount));
   for (const Joint& j : model_.joints) {
+    if (j.driven) gamma[j.constraintOffset] = -j.drive.acceleration(t);
     if (!j.cut) continue;
     const int parent = j.parentMarker.body, child = j.childMarker.body;
     const JointConstraint jc = constraintOf(j);

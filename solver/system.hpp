@@ -47,9 +47,9 @@ class System : public Dynamics {
   void evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda);
 
  private:
-  void rigidResidual(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
-                     VectorXd& r, VectorXd& phi);
-  void rigidTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
+  void rigidResidual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+                     const VectorXd& lambda, VectorXd& r, VectorXd& phi);
+  void rigidTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                     double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
   void jointForces(const VectorXd& v, VectorXd& tau) const;
 

@@ -121,6 +121,12 @@ Model assemble(const Scene& scene) {
     j.parentMarker = markerOn(parent, frameOf(parent), jointFrame);
     j.childMarker = markerOn(child, frameOf(child), jointFrame);
     layOutCoordinates(model, j, spec);
+    if (spec.driven) {
+      j.driven = true;
+      j.drive = spec.drive;
+      j.constraintOffset = model.constraintCount;
+      model.constraintCount += 1;
+    }
     model.bodies[child].parent = parent;
     model.bodies[child].inboardJoint = int(model.joints.size());
     model.joints.push_back(j);

@@ -46,7 +46,9 @@ struct Joint {
   bool actuated = false;   // generalized force input along its DOFs
   int inputOffset = -1;    // into the joint-force input vector
   double damping = 0.0;    // tunable
-  int constraintOffset = -1;  // cut joints: first row in Phi (and lambda)
+  int constraintOffset = -1;  // cut joints and drives: first row in Phi (and lambda)
+  bool driven = false;        // coordinate = drive(t), a constraint row (lambda: minus the drive force)
+  TimeFunction drive;
 };
 
 struct Model {

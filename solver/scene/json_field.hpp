@@ -2,6 +2,7 @@
 // every error names where it is and what was expected (internal to scene/).
 #pragma once
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <string>
@@ -32,6 +33,15 @@ class Field {
       : j_(value), path_(std::move(path)), params_(params) {}
 
   const json& raw() const { return j_; }
+  const std::map<std::string, double>& parameters() const { return params_; }
+
+  // The text of a time function: a string as written, a number in full precision.
+  std::string expressionText() const {
+    if (j_.is_string()) return j_.get<std::string>();
+    char text[32];
+    std::snprintf(text, sizeof text, "%.17g", number());
+    return text;
+  }
   const std::string& path() const { return path_; }
   [[noreturn]] void fail(const std::string& message) const { throw SceneError(path_, message); }
 

@@ -142,7 +142,8 @@ JointType parseJointType(const Field& f) {
 }
 
 JointSpec parseJoint(const Field& f) {
-  f.expectObject({"name", "type", "parent", "child", "position", "axis", "cut", "initial", "damping", "actuated"},
+  f.expectObject({"name", "type", "parent", "child", "position", "axis", "cut", "initial", "damping", "actuated",
+                  "drive"},
                  {"name", "type", "parent", "child", "position"});
   JointSpec jt;
   jt.name = f.at("name").identifier();
@@ -154,6 +155,16 @@ JointSpec parseJoint(const Field& f) {
   if (f.has("cut")) jt.cut = f.at("cut").boolean();
   if (f.has("damping")) jt.damping = f.at("damping").nonNegative();
   if (f.has("actuated")) jt.torqueInput = f.at("actuated").boolean();
+  if (f.has("drive")) {
+    const Field d = f.at("drive");
+    jt.driven = true;
+    jt.drive = TimeFunction(d.expressionText(), f.parameters());
+    try {
+      if (!std::isfinite(jt.drive(0.0))) d.fail("expected a finite coordinate at t = 0");
+    } catch (const std::invalid_argument& e) {
+      d.fail(e.what());
+    }
+  }
   if (f.has("initial")) {
     const Field init = f.at("initial");
     init.expectObject({"coordinates", "rates"}, {});

@@ -92,8 +92,7 @@ SupportSpec parseSupport(const Field& f, int nodeCount, const std::map<std::stri
       f.fail("a driven support takes exactly one of \"angle\" (a function of t) or \"rate_input\": true");
     if (f.has("angle")) {
       const Field a = f.at("angle");
-      if (a.raw().is_number()) s.angle = TimeFunction(std::to_string(a.number()), params);
-      else s.angle = TimeFunction(a.string(), params);
+      s.angle = TimeFunction(a.expressionText(), params);
       try {
         const double probe = s.angle(0.0);
         if (!std::isfinite(probe)) a.fail("expected a finite angle at t = 0");
@@ -134,7 +133,7 @@ NodalLoadSpec parseLoad(const Field& f, int nodeCount, const std::map<std::strin
   if (f.has("follower")) l.follower = f.at("follower").boolean();
   if (f.has("scale")) {
     const Field s = f.at("scale");
-    l.scale = TimeFunction(s.raw().is_number() ? std::to_string(s.number()) : s.string(), params);
+    l.scale = TimeFunction(s.expressionText(), params);
     try {
       if (!std::isfinite(l.scale(0.0))) s.fail("expected a finite scale at t = 0");
     } catch (const std::invalid_argument& e) {

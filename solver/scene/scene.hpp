@@ -51,6 +51,8 @@ struct JointSpec {
   std::vector<double> initialRates;
   double damping = 0.0;    // viscous, per DOF, N m s/rad or N s/m
   bool torqueInput = false;  // an FMI input acting along the joint's DOFs
+  bool driven = false;       // the (single) coordinate follows `drive`(t): a constraint row
+  TimeFunction drive;
 };
 
 // A support of a flexible node (Dirichlet condition, eliminated from the

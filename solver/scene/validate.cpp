@@ -50,6 +50,11 @@ void checkJoint(const Scene& scene, std::size_t i, const std::set<std::string>& 
                                                   std::to_string(j.initialRates.size()));
   if (j.torqueInput && n == 0)
     throw SceneError(path + ".actuated", "a fixed joint has no coordinate to actuate");
+  if (j.driven && (n != 1 || j.cut))
+    throw SceneError(path + ".drive", "joint '" + j.name + "': a drive prescribes the coordinate of a one-DOF tree "
+                                          "joint (revolute or prismatic)");
+  if (j.driven && j.torqueInput)
+    throw SceneError(path + ".actuated", "joint '" + j.name + "' is driven: its force comes from the drive");
   if (j.cut && j.torqueInput)
     throw SceneError(path + ".actuated", "joint '" + j.name + "' is a cut joint: it has no coordinates to actuate");
   if (j.cut && j.damping != 0.0)
