@@ -153,3 +153,20 @@ def test_impossible_assembly_is_an_error_naming_the_loop(tmp_path):
         assert "cut joint 'C'" in s.messages() or "drive of joint 'D'" in s.messages()
     finally:
         s.free()
+
+
+def test_bricard_with_its_redundant_constraint_keeps_its_energy():
+    # R4: Grubler count 0, mobility 1; the cut joint's rows are rank deficient by one.
+    rods = [f"rod{i}" for i in range(1, 6)]
+    outputs = [f"{b}.{q}.{c}" for b in rods for q in ("position", "velocity", "angular_velocity") for c in "xyz"]
+    outputs += [f"{b}.orientation.{c}" for b in rods for c in "wxyz"]
+    r = simulate_fmu(FMUS / "bricard.fmu", output=outputs)
+    J = np.diag([2 * 0.01 / 12, 1.01 / 12, 1.01 / 12])  # rod along its body x axis
+    energy = 0.0
+    for b in rods:
+        A = Rotation.from_quat(np.column_stack([r[f"{b}.orientation.{c}"] for c in "xyzw"])).as_matrix()
+        w = np.einsum("nji,nj->ni", A, np.column_stack([r[f"{b}.angular_velocity.{c}"] for c in "xyz"]))
+        energy = energy + 0.5 * sum(r[f"{b}.velocity.{c}"] ** 2 for c in "xyz") \
+            + 0.5 * np.einsum("ni,ij,nj->n", w, J, w) + G * r[f"{b}.position.y"]
+    assert np.max(np.abs(energy - energy[0])) < 1e-6 * abs(energy[0])
+    assert np.ptp(r["rod1.position.x"]) > 0.5  # it really moves
