@@ -175,3 +175,44 @@ def test_a_scene_exposes_only_the_nodes_it_lists(tmp_path):
     body["outputs"] = {}
     md = read_model_description(str(packed(scene, tmp_path, "none")))
     assert not [v for v in md.modelVariables if v.causality == "output"]
+
+
+def test_rate_input_drives_the_support_rotation(tmp_path):
+    scene = load_scene("spin_up_beam")
+    body = scene["flexible_bodies"][0]
+    body["supports"] = [{"node": 0, "type": "driven", "axis": [0, 0, 1], "rate_input": True}]
+    body["outputs"] = {"nodes": [0]}
+    s = Slave(packed(scene, tmp_path))
+    try:
+        s.start()
+        t = 0.0
+        for rate, steps in ((0.5, 100), (-2.0, 50), (1.0, 30)):  # rad/s, held over 0.01 s steps
+            assert s.set("beam.node0.drive_rate", rate) == 0
+            for _ in range(steps):
+                assert s.step(t, 0.01) == 0
+                t += 0.01
+        angle = 0.5 * 1.0 - 2.0 * 0.5 + 1.0 * 0.3
+        w, z = s.get("beam.node0.orientation.w", "beam.node0.orientation.z")
+        assert abs(2 * np.arctan2(z, w) - angle) < 1e-12
+        assert abs(s.get("beam.node0.angular_velocity.z") - 1.0) < 1e-12
+    finally:
+        s.free()
+
+
+def test_input_tip_load_deflects_a_static_cantilever(tmp_path):
+    scene = with_elements(load_scene("cantilever_moment"), 8)
+    body = scene["flexible_bodies"][0]
+    body["loads"] = [{"node": 8, "input": True}]
+    scene["experiment"] = {"stop_time": 1.0, "output_interval": 0.5}
+    s = Slave(packed(scene, tmp_path))
+    try:
+        s.start()
+        P = 1e-4  # small: linear, P L^3 / (3 EI) (shear-rigid section)
+        assert s.set("beam.node8.force.y", P) == 0
+        assert s.step(0.0, 0.5) == 0
+        assert abs(s.get("beam.node8.position.y") / (P / 3.0) - 1) < 1e-6
+        assert s.set("beam.node8.force.y", 0.0) == 0
+        assert s.step(0.5, 0.5) == 0
+        assert abs(s.get("beam.node8.position.y")) < 1e-14  # unloaded again
+    finally:
+        s.free()
