@@ -131,7 +131,8 @@ void writeStructure(std::ostream& x, const std::vector<Variable>& table) {
     if (table[i].causality != Causality::Output) continue;
     const QuantityKind k = table[i].quantity.kind;
     const bool feedthrough = k == QuantityKind::JointReactionForce || k == QuantityKind::JointReactionTorque ||
-                             k == QuantityKind::JointDriveForce;
+                             k == QuantityKind::JointDriveForce ||
+                             (k == QuantityKind::SpringLength && table[i].quantity.component == 2);
     x << "      <Unknown index=\"" << i + 1 << "\" dependencies=\"" << (feedthrough ? inputs : "") << "\"/>\n";
   }
   x << "    </Outputs>\n    <InitialUnknowns>\n";

@@ -105,8 +105,23 @@ std::vector<Variable> variableTable(const Scene& scene) {
     }
   }
 
-  // Flexible inputs, named by body and node, at the offsets the assembly gave.
+  // Force-element inputs and flexible inputs, at the offsets the assembly gave.
   const Model model = assemble(scene);
+  for (const ForceElement& e : model.forces) {
+    if (e.inputOffset < 0) continue;
+    if (e.kind == ForceElement::Kind::SpringDamper) {
+      t.add(e.name + ".actuator_force", Causality::Input, Variability::Continuous, "N",
+            "actuator tension added to the spring-damper", {QK::ForceInput, e.inputOffset}, 0.0);
+      continue;
+    }
+    const char* frame = e.bodyFrame ? "body frame" : "world";
+    for (int c = 0; c < 3; ++c)
+      t.add(e.name + ".force." + kAxes[c], Causality::Input, Variability::Continuous, "N",
+            std::string("applied force, ") + frame, {QK::ForceInput, e.inputOffset + c}, 0.0);
+    for (int c = 0; c < 3; ++c)
+      t.add(e.name + ".torque." + kAxes[c], Causality::Input, Variability::Continuous, "N.m",
+            std::string("applied torque, ") + frame, {QK::ForceInput, e.inputOffset + 3 + c}, 0.0);
+  }
   const FlexibleMesh& mesh = model.flexible;
   auto nodeName = [&](int node) {
     for (const FlexibleBody& fb : mesh.bodies)
@@ -169,6 +184,14 @@ std::vector<Variable> variableTable(const Scene& scene) {
     for (int c = 0; c < 3; ++c)
       t.output(name + ".angular_velocity." + kAxes[c], "rad/s", "angular velocity, world",
                {QK::BodyAngularVelocity, b, c});
+  }
+  for (int f = 0; f < int(model.forces.size()); ++f) {
+    const ForceElement& e = model.forces[f];
+    if (e.kind != ForceElement::Kind::SpringDamper) continue;
+    t.output(e.name + ".length", "m", "distance between the spring's points", {QK::SpringLength, f, 0});
+    t.output(e.name + ".length_rate", "m/s", "rate of the length", {QK::SpringLength, f, 1});
+    t.output(e.name + ".tension", "N", "spring, damper and actuator force (pulling the points together)",
+             {QK::SpringLength, f, 2});
   }
   for (std::size_t b = 0; b < scene.flexibleBodies.size(); ++b) {
     const FlexibleBodySpec& spec = scene.flexibleBodies[b];

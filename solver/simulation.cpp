@@ -3,6 +3,7 @@
 #include "coupling/joint_constraint.hpp"
 #include "integrator/generalized_alpha.hpp"
 #include "integrator/static_equilibrium.hpp"
+#include "rigid/force_elements.hpp"
 #include "rigid/recursive_dynamics.hpp"
 
 namespace mfbd {
@@ -131,6 +132,19 @@ void Simulation::updateQuaternions(bool reset) {
 }
 
 AdvanceResult Simulation::doStep(double H) {
+  // An input that jumped at this communication point is a discontinuity:
+  // restart generalized-alpha there (a = vdot of the new inputs), or its
+  // algorithmic acceleration would carry the old input into the step (an
+  // O(h) error that does not go away).
+  if (inputsChangedSinceStep_ && scene_.analysis == Analysis::Dynamic) {
+    IntegratorState restart = state_;
+    std::string message;
+    if (stepper_->initialize(system_, restart, message)) {
+      state_.vdot = restart.vdot;
+      state_.a = restart.vdot;
+      state_.lambda = restart.lambda;
+    }
+  }
   IntegratorState start = state_;
   AdvanceResult result = stepper_->advance(system_, state_, state_.t + H);
   if (!result.ok) {
@@ -181,6 +195,7 @@ double Simulation::read(const Quantity& q) {
       return system_.jointInputs()[j.inputOffset + q.component];
     }
     case QuantityKind::FlexibleInput: return system_.flexibleInputs()[q.index];
+    case QuantityKind::ForceInput: return system_.forceInputs()[q.index];
     case QuantityKind::FlexibleDamping: {
       const FlexibleBody& b = model.flexible.bodies[q.index];
       return b.elementCount > 0 ? model.flexible.elements[b.firstElement].damping : 0.0;
@@ -190,6 +205,10 @@ double Simulation::read(const Quantity& q) {
   evaluateOutputs();
   if (q.kind >= QuantityKind::NodePosition) return readFlexible(q);
   const Data& data = system_.data();
+  if (q.kind == QuantityKind::SpringLength) {
+    const SpringState s = springState(model.forces[q.index], system_.forceInputs(), data);
+    return q.component == 0 ? s.length : q.component == 1 ? s.rate : s.force;
+  }
   if (q.kind == QuantityKind::JointDriveForce)
     return -outputLambda_[model.joints[jointIndex_[q.index]].constraintOffset];
   if (q.kind == QuantityKind::JointCoordinate || q.kind == QuantityKind::JointRate ||
@@ -247,6 +266,14 @@ double Simulation::readFlexible(const Quantity& q) {
   }
 }
 
+// Only a value that differs counts as a change (a master may set every
+// input at every communication point).
+void Simulation::setInput(double& slot, double value) {
+  if (slot == value) return;
+  slot = value;
+  inputsChangedSinceStep_ = true;
+}
+
 bool Simulation::write(const Quantity& q, double value) {
   Model& model = system_.tunableModel();
   switch (q.kind) {
@@ -256,14 +283,11 @@ bool Simulation::write(const Quantity& q, double value) {
       break;
     case QuantityKind::JointForceInput: {
       const Joint& j = model.joints[jointIndex_[q.index]];
-      system_.jointInputs()[j.inputOffset + q.component] = value;
-      inputsChangedSinceStep_ = true;
+      setInput(system_.jointInputs()[j.inputOffset + q.component], value);
       break;
     }
-    case QuantityKind::FlexibleInput:
-      system_.flexibleInputs()[q.index] = value;
-      inputsChangedSinceStep_ = true;
-      break;
+    case QuantityKind::ForceInput: setInput(system_.forceInputs()[q.index], value); break;
+    case QuantityKind::FlexibleInput: setInput(system_.flexibleInputs()[q.index], value); break;
     case QuantityKind::FlexibleDamping: {
       const FlexibleBody& b = model.flexible.bodies[q.index];
       for (int e = 0; e < b.elementCount; ++e) model.flexible.elements[b.firstElement + e].damping = value;

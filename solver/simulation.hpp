@@ -22,6 +22,8 @@ enum class QuantityKind {
   JointReactionForce,   // component 0..2, child marker frame
   JointReactionTorque,  // about the child marker origin
   JointDriveForce,      // generalized force of a drive along its coordinate
+  ForceInput,           // index: offset into the force-element inputs             (input)
+  SpringLength,         // index: force element; length, rate (component 1), tension (component 2)
   BodyPosition,         // user body frame origin, world
   BodyOrientation,      // quaternion w, x, y, z (body -> world)
   BodyVelocity,
@@ -72,6 +74,7 @@ class Simulation {
   bool assembleConstraints(std::string& message, std::vector<std::string>* notes);
   std::string constraintOwner(int row) const;
   double readFlexible(const Quantity& q);
+  void setInput(double& slot, double value);
 
   const Scene scene_;
   System system_;

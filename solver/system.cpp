@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "coupling/joint_constraint.hpp"
+#include "rigid/force_elements.hpp"
 #include "rigid/recursive_dynamics.hpp"
 
 namespace mfbd {
@@ -11,7 +12,8 @@ System::System(Model model)
     : model_(std::move(model)),
       data_(model_),
       jointInputs_(VectorXd::Zero(model_.jointInputCount)),
-      flexibleInputs_(VectorXd::Zero(model_.flexible.inputCount)) {
+      flexibleInputs_(VectorXd::Zero(model_.flexible.inputCount)),
+      forceInputs_(VectorXd::Zero(model_.forceInputCount)) {
   drives_.startAngle.assign(model_.flexible.drives.size(), 0.0);
 }
 
@@ -23,12 +25,13 @@ void System::endStep(double t) {
   drives_.stepStart = t;
 }
 
-// tau = actuator inputs - viscous joint damping, along each joint's DOFs.
-void System::jointForces(const VectorXd& v, VectorXd& tau) const {
+// tau = actuator inputs - viscous joint damping - rotational springs, along each joint's DOFs.
+void System::jointForces(const Configuration& q, const VectorXd& v, VectorXd& tau) const {
   tau.setZero(model_.rigidVelocityCount);
   for (const Joint& j : model_.joints) {
     auto t = tau.segment(j.velocityOffset, j.dofs);
-    t = -j.damping * v.segment(j.velocityOffset, j.dofs);
+    t = -(j.damping + j.springDamping) * v.segment(j.velocityOffset, j.dofs);
+    if (j.springStiffness != 0.0) t[0] -= j.springStiffness * (q.scalars[j.scalarOffset] - j.springFreeCoordinate);
     if (j.actuated) t += jointInputs_.segment(j.inputOffset, j.dofs);
   }
 }
@@ -62,6 +65,7 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
     data_.appliedForce[i] = model_.bodies[i].mass * model_.gravity;
     data_.appliedTorque[i].setZero();
   }
+  applyForceElements(model_.forces, forceInputs_, data_);
   phi.setZero(model_.constraintCount);
   for (const Joint& j : model_.joints) {
     if (!j.cut) continue;
@@ -80,7 +84,7 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
       data_.appliedTorque[parent] += onParent.tail<3>();
     }
   }
-  jointForces(v, tau_);
+  jointForces(q, v, tau_);
   backwardNewtonEuler(model_, data_, tau_, r);
   // Drives: coordinate - drive(t) = 0; the multiplier acts along the DOF.
   for (const Joint& j : model_.joints) {

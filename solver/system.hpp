@@ -21,6 +21,9 @@ class System : public Dynamics {
   // Generalized joint-force inputs (torques/forces along actuated DOFs).
   VectorXd& jointInputs() { return jointInputs_; }
   const VectorXd& jointInputs() const { return jointInputs_; }
+  // Force-element inputs: spring actuator forces, applied forces and torques.
+  VectorXd& forceInputs() { return forceInputs_; }
+  const VectorXd& forceInputs() const { return forceInputs_; }
   // Flexible-body inputs: six per input load, one per rate-driven support.
   VectorXd& flexibleInputs() { return flexibleInputs_; }
   const VectorXd& flexibleInputs() const { return flexibleInputs_; }
@@ -51,11 +54,11 @@ class System : public Dynamics {
                      const VectorXd& lambda, VectorXd& r, VectorXd& phi);
   void rigidTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                     double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
-  void jointForces(const VectorXd& v, VectorXd& tau) const;
+  void jointForces(const Configuration& q, const VectorXd& v, VectorXd& tau) const;
 
   Model model_;
   Data data_;
-  VectorXd jointInputs_, flexibleInputs_;
+  VectorXd jointInputs_, flexibleInputs_, forceInputs_;
   DriveState drives_;
   std::vector<NodeState> nodes_;
   VectorXd tau_, rigid_;

@@ -11,6 +11,7 @@ namespace mfbd {
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 using Quat = Eigen::Quaterniond;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
 
 // skew(a) * b == a.cross(b)
 Mat3 skew(const Vec3& a);

@@ -147,6 +147,42 @@ Model assemble(const Scene& scene) {
     model.constraintCount += constraintCount(spec.type);
     model.joints.push_back(j);
   }
+  // Force elements: their points become markers on the bodies.
+  for (const ForceSpec& f : scene.forces) {
+    if (f.kind == ForceSpec::Kind::RotationalSpringDamper) {
+      Joint& j = model.joints[findJoint(model, f.joint)];
+      j.springStiffness = f.stiffness;
+      j.springDamping = f.damping;
+      j.springFreeCoordinate = f.freeLength;
+      continue;
+    }
+    ForceElement e;
+    e.name = f.name;
+    const int b1 = indexOf(f.body1), b2 = f.kind == ForceSpec::Kind::AppliedForce ? kGroundIndex : indexOf(f.body2);
+    e.marker1 = markerOn(b1, frameOf(b1), {f.point1, f.orientation});
+    e.marker2 = markerOn(b2, frameOf(b2), {f.point2, f.orientation});
+    switch (f.kind) {
+      case ForceSpec::Kind::SpringDamper:
+        e.kind = ForceElement::Kind::SpringDamper;
+        e.stiffness = f.stiffness;
+        e.damping = f.damping;
+        e.freeLength = f.freeLength >= 0.0 ? f.freeLength : (f.point2 - f.point1).norm();
+        if (f.actuated) e.inputOffset = model.forceInputCount++;
+        break;
+      case ForceSpec::Kind::Bushing:
+        e.kind = ForceElement::Kind::Bushing;
+        e.bushingStiffness = f.stiffness6;
+        e.bushingDamping = f.damping6;
+        break;
+      default:
+        e.kind = ForceElement::Kind::AppliedForce;
+        e.bodyFrame = f.bodyFrame;
+        e.inputOffset = model.forceInputCount;
+        model.forceInputCount += 6;
+        break;
+    }
+    model.forces.push_back(e);
+  }
   model.rigidVelocityCount = model.velocityCount;
   model.analysis = scene.analysis;
   assembleFlexibleBodies(scene, model.flexible, model.blocks, model.initialConfiguration, model.initialVelocity,

@@ -47,8 +47,21 @@ struct Joint {
   int inputOffset = -1;    // into the joint-force input vector
   double damping = 0.0;    // tunable
   int constraintOffset = -1;  // cut joints and drives: first row in Phi (and lambda)
+  double springStiffness = 0.0, springDamping = 0.0, springFreeCoordinate = 0.0;  // rotational spring-damper
   bool driven = false;        // coordinate = drive(t), a constraint row (lambda: minus the drive force)
   TimeFunction drive;
+};
+
+// A force element between markers (rigid/force_elements.hpp applies it).
+struct ForceElement {
+  enum class Kind { SpringDamper, Bushing, AppliedForce };
+  std::string name;
+  Kind kind = Kind::SpringDamper;
+  Marker marker1, marker2;      // applied force: marker1 only
+  double stiffness = 0.0, damping = 0.0, freeLength = 0.0;  // spring-damper
+  Vec6 bushingStiffness = Vec6::Zero(), bushingDamping = Vec6::Zero();  // in marker1's frame
+  bool bodyFrame = false;       // applied force: components in marker1's frame (else world)
+  int inputOffset = -1;         // actuator force (1) or applied force and torque (6)
 };
 
 struct Model {
@@ -58,6 +71,8 @@ struct Model {
   Vec3 gravity = Vec3::Zero();
   SolverOptions solver;
   FlexibleMesh flexible;        // nodes, beam elements, supports, loads, drives
+  std::vector<ForceElement> forces;  // between markers on bodies
+  int forceInputCount = 0;
   Analysis analysis = Analysis::Dynamic;
   std::vector<CoordinateBlock> blocks;  // the configuration manifold
   int rigidVelocityCount = 0;   // joint rates come first in v, then flexible nodes

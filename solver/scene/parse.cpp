@@ -217,6 +217,7 @@ void parseSelection(const Field& f, bool& all, std::vector<std::string>& names) 
 void chooseCutJoints(Scene& scene);      // validate.cpp
 void validateScene(const Scene& scene);  // validate.cpp
 FlexibleBodySpec parseFlexibleBody(const Field& f, const std::map<std::string, double>& params);  // parse_flexible.cpp
+ForceSpec parseForce(const Field& f);  // parse_forces.cpp
 
 Scene parseScene(const std::string& text, const std::map<std::string, double>& parameterValues) {
   if (text.find_first_not_of(" \t\r\n") == std::string::npos)
@@ -230,7 +231,7 @@ Scene parseScene(const std::string& text, const std::map<std::string, double>& p
   std::map<std::string, double> params;
   const Field root(doc, "", params);
   root.expectObject({"format", "name", "description", "parameters", "gravity", "solver", "experiment", "analysis",
-                     "bodies", "joints", "flexible_bodies", "outputs"},
+                     "bodies", "joints", "flexible_bodies", "forces", "outputs"},
                     {"format", "name"});
   if (root.at("format").string() != "mfbd-scene/1")
     root.at("format").fail("expected \"mfbd-scene/1\"");
@@ -261,6 +262,10 @@ Scene parseScene(const std::string& text, const std::map<std::string, double>& p
     const Field flexible = root.at("flexible_bodies");
     for (std::size_t i = 0; i < flexible.arraySize(); ++i)
       scene.flexibleBodies.push_back(parseFlexibleBody(flexible.at(i), params));
+  }
+  if (root.has("forces")) {
+    const Field forces = root.at("forces");
+    for (std::size_t i = 0; i < forces.arraySize(); ++i) scene.forces.push_back(parseForce(forces.at(i)));
   }
   if (root.has("outputs")) {
     const Field out = root.at("outputs");

@@ -16,6 +16,9 @@ namespace mfbd {
 
 // A user parameter: a named number that scene fields may use in expressions
 // ("mass": "m", "position": ["L", 0, 0]). Exposed as an FMU parameter.
+// The name that stands for the world in joint.parent / joint.child.
+inline constexpr const char* kGround = "ground";
+
 struct ParameterSpec {
   std::string name;
   double value = 0.0;
@@ -104,6 +107,25 @@ struct FlexibleBodySpec {
   std::vector<int> outputElements;
 };
 
+// A force element between bodies (points in world coordinates of the design
+// configuration; "ground" allowed): spring_damper (tension k (l - l0) + c
+// ldot + actuator input), bushing (6-DOF stiffness and damping in its frame),
+// applied_force (force and torque from FMI inputs, world or body frame), or
+// rotational_spring_damper on a one-DOF joint (in joint space).
+struct ForceSpec {
+  enum class Kind { SpringDamper, Bushing, AppliedForce, RotationalSpringDamper };
+  std::string name;
+  Kind kind = Kind::SpringDamper;
+  std::string body1 = kGround, body2 = kGround, joint;
+  Vec3 point1 = Vec3::Zero(), point2 = Vec3::Zero();
+  Mat3 orientation = Mat3::Identity();  // bushing frame
+  double stiffness = 0.0, damping = 0.0;
+  double freeLength = -1.0;             // < 0: the design distance (or angle 0)
+  bool actuated = false;                // spring_damper: actuator force input
+  bool bodyFrame = false;               // applied_force: components in the body frame
+  Vec6 stiffness6 = Vec6::Zero(), damping6 = Vec6::Zero();
+};
+
 enum class Analysis { Dynamic, Static };
 
 struct SolverOptions {
@@ -142,6 +164,7 @@ struct Scene {
   std::vector<BodySpec> bodies;
   std::vector<JointSpec> joints;
   std::vector<FlexibleBodySpec> flexibleBodies;
+  std::vector<ForceSpec> forces;
   OutputSelection outputs;
   // Static: each step solves equilibrium at the loads of its end time (load
   // stepping with Newton; halving on failure), no inertia.
@@ -166,8 +189,5 @@ class SceneError : public std::runtime_error {
 // Throws SceneError naming the first bad field.
 Scene parseScene(const std::string& text,
                  const std::map<std::string, double>& parameterValues = {});
-
-// The name that stands for the world in joint.parent / joint.child.
-inline constexpr const char* kGround = "ground";
 
 }  // namespace mfbd

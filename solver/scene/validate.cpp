@@ -27,6 +27,7 @@ void checkNames(const Scene& scene) {
   for (std::size_t i = 0; i < scene.joints.size(); ++i) claim(scene.joints[i].name, jointPath(i) + ".name");
   for (std::size_t i = 0; i < scene.flexibleBodies.size(); ++i)
     claim(scene.flexibleBodies[i].name, "flexible_bodies[" + std::to_string(i) + "].name");
+  for (std::size_t i = 0; i < scene.forces.size(); ++i) claim(scene.forces[i].name, "forces[" + std::to_string(i) + "].name");
 }
 
 void checkJoint(const Scene& scene, std::size_t i, const std::set<std::string>& bodies) {
@@ -118,6 +119,32 @@ void chooseCutJoints(Scene& scene) {
   }
 }
 
+void checkForces(const Scene& scene, const std::set<std::string>& bodies) {
+  for (std::size_t i = 0; i < scene.forces.size(); ++i) {
+    const ForceSpec& f = scene.forces[i];
+    const std::string path = "forces[" + std::to_string(i) + "]";
+    if (f.kind == ForceSpec::Kind::RotationalSpringDamper) {
+      const JointSpec* joint = nullptr;
+      for (const JointSpec& j : scene.joints)
+        if (j.name == f.joint) joint = &j;
+      if (!joint) throw SceneError(path + ".joint", "force '" + f.name + "' names unknown joint \"" + f.joint + "\"");
+      if (joint->cut || jointDofs(joint->type) != 1)
+        throw SceneError(path + ".joint", "force '" + f.name + "': a rotational spring-damper acts on a one-DOF tree joint");
+      continue;
+    }
+    const bool applied = f.kind == ForceSpec::Kind::AppliedForce;
+    for (int k = 1; k <= (applied ? 1 : 2); ++k) {
+      const std::string& b = k == 1 ? f.body1 : f.body2;
+      if (b != kGround && !bodies.count(b))
+        throw SceneError(path + (applied ? ".body" : ".body" + std::to_string(k)),
+                         "force '" + f.name + "' names unknown body \"" + b + "\"");
+    }
+    if (applied && f.body1 == kGround) throw SceneError(path + ".body", "a force applied to ground does nothing");
+    if (f.kind == ForceSpec::Kind::SpringDamper && f.freeLength < 0.0 && (f.point2 - f.point1).norm() < 1e-12)
+      throw SceneError(path, "spring '" + f.name + "' has zero length; its direction is undefined");
+  }
+}
+
 void validateScene(const Scene& scene) {
   if (scene.bodies.empty() && scene.flexibleBodies.empty())
     throw SceneError("bodies", "expected at least one body or flexible body");
@@ -127,6 +154,7 @@ void validateScene(const Scene& scene) {
   for (std::size_t i = 0; i < scene.joints.size(); ++i) checkJoint(scene, i, bodies);
   checkTree(scene);
   checkOutputs(scene, bodies);
+  checkForces(scene, bodies);
 }
 
 }  // namespace mfbd

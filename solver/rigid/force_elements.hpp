@@ -1,0 +1,25 @@
+// Force elements between bodies, written against markers (points and frames
+// fixed in bodies): a translational spring-damper-actuator, a 6-DOF bushing,
+// and an applied force and torque from FMI inputs. Each turns the two
+// markers' poses and velocities into wrenches on the bodies (world, about
+// each body's centre of mass). Rotational spring-dampers act in joint space
+// (joint forces, like joint damping).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "model/data.hpp"
+
+namespace mfbd {
+
+// Adds every element's wrenches to data.appliedForce / appliedTorque (after
+// forwardKinematics); `inputs` holds the force-element inputs.
+void applyForceElements(const std::vector<ForceElement>& elements, const VectorXd& inputs, Data& data);
+
+// Length, rate and tension of a spring-damper (for outputs).
+struct SpringState {
+  double length = 0.0, rate = 0.0, force = 0.0;
+};
+SpringState springState(const ForceElement& e, const VectorXd& inputs, const Data& data);
+
+}  // namespace mfbd

@@ -1,0 +1,79 @@
+// "forces" of scene JSON: force elements between bodies and on joints.
+#include "scene/json_field.hpp"
+
+namespace mfbd {
+
+namespace {
+
+Vec6 sixNumbers(const Field& f) {
+  const std::vector<double> v = f.numbers();
+  if (v.size() != 6) f.fail("expected 6 numbers (x, y, z translation, then rotation), got " + std::to_string(v.size()));
+  Vec6 out;
+  for (int i = 0; i < 6; ++i) {
+    if (v[i] < 0.0) f.at(i).fail("expected a value >= 0");
+    out[i] = v[i];
+  }
+  return out;
+}
+
+}  // namespace
+
+ForceSpec parseForce(const Field& f) {
+  if (!f.raw().is_object()) f.fail("expected an object, got " + typeName(f.raw()));
+  if (!f.has("type")) throw SceneError(f.path() + ".type", "missing required field");
+  const std::string type = f.at("type").string();
+  ForceSpec s;
+  if (type == "spring_damper") {
+    f.expectObject({"name", "type", "body1", "point1", "body2", "point2", "stiffness", "damping", "free_length",
+                    "actuated"},
+                   {"name", "body1", "point1", "body2", "point2"});
+    s.kind = ForceSpec::Kind::SpringDamper;
+    s.body1 = f.at("body1").identifier();
+    s.point1 = f.at("point1").vec3();
+    s.body2 = f.at("body2").identifier();
+    s.point2 = f.at("point2").vec3();
+    if (f.has("free_length")) s.freeLength = f.at("free_length").nonNegative();
+    if (f.has("actuated")) s.actuated = f.at("actuated").boolean();
+  } else if (type == "bushing") {
+    f.expectObject({"name", "type", "body1", "body2", "position", "orientation", "stiffness", "damping"},
+                   {"name", "body1", "body2", "position", "stiffness"});
+    s.kind = ForceSpec::Kind::Bushing;
+    s.body1 = f.at("body1").identifier();
+    s.body2 = f.at("body2").identifier();
+    s.point1 = s.point2 = f.at("position").vec3();
+    if (f.has("orientation")) {
+      const Field o = f.at("orientation");
+      o.expectObject({"z_axis", "x_axis"}, {"z_axis"});
+      s.orientation = frameFromZAxis(o.at("z_axis").direction());
+    }
+    s.stiffness6 = sixNumbers(f.at("stiffness"));
+    if (f.has("damping")) s.damping6 = sixNumbers(f.at("damping"));
+  } else if (type == "applied_force") {
+    f.expectObject({"name", "type", "body", "point", "frame"}, {"name", "body", "point"});
+    s.kind = ForceSpec::Kind::AppliedForce;
+    s.body1 = f.at("body").identifier();
+    s.point1 = f.at("point").vec3();
+    if (f.has("frame")) {
+      const std::string frame = f.at("frame").string();
+      if (frame != "world" && frame != "body") f.at("frame").fail("expected \"world\" or \"body\"");
+      s.bodyFrame = frame == "body";
+    }
+  } else if (type == "rotational_spring_damper") {
+    f.expectObject({"name", "type", "joint", "stiffness", "damping", "free_angle"}, {"name", "joint"});
+    s.kind = ForceSpec::Kind::RotationalSpringDamper;
+    s.joint = f.at("joint").identifier();
+    if (f.has("free_angle")) s.freeLength = f.at("free_angle").number();
+    else s.freeLength = 0.0;
+  } else {
+    f.at("type").fail("unknown force type \"" + type +
+                      "\"; expected spring_damper, bushing, applied_force or rotational_spring_damper");
+  }
+  s.name = f.at("name").identifier();
+  if (s.kind == ForceSpec::Kind::SpringDamper || s.kind == ForceSpec::Kind::RotationalSpringDamper) {
+    if (f.has("stiffness")) s.stiffness = f.at("stiffness").nonNegative();
+    if (f.has("damping")) s.damping = f.at("damping").nonNegative();
+  }
+  return s;
+}
+
+}  // namespace mfbd
