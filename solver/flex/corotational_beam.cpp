@@ -42,30 +42,51 @@ Mat7 localTimoshenkoStiffness(const BeamSection& s, double L) {
 }
 
 // ---------------------------------------------------------------------------
-// Derivative of the inverse tangent T^-1(theta) = I + S/2 + e(t) S^2
-// (S = skew(theta), t = |theta|, e = (1 - (t/2) cot(t/2)) / t^2, see
-// math/rotation.cpp) in the direction dtheta:
+// Inverse tangent T^-1(theta) = I + S/2 + e(t) S^2 (S = skew(theta),
+// t = |theta|, e = (1 - (t/2) cot(t/2)) / t^2, see math/rotation.cpp) and its
+// derivative in a direction dtheta,
 //   dT^-1 = skew(dtheta)/2 + e (skew(dtheta) S + S skew(dtheta))
 //           + (e'(t)/t) (theta . dtheta) S^2.
 // The closed forms of e and e'/t cancel badly for small t (e'/t loses ~1e-9
 // at t = 0.3); below 0.3 use the Taylor series, e = sum_n |B_2n|/(2n)! t^(2n-2)
 // (from x cot x), truncated where the next term is below 1e-12 relative.
 // ---------------------------------------------------------------------------
-Mat3 inverseTangentDerivative(const Vec3& theta, const Vec3& dtheta) {
-  const double t = theta.norm(), t2 = t * t;
-  double e, dEoverT;
-  if (t < 0.3) {
+struct InverseTangentCoefficients {
+  double e = 0.0, dEoverT = 0.0;
+};
+
+InverseTangentCoefficients inverseTangentCoefficients(const Vec3& theta) {
+  const double t2 = theta.squaredNorm();
+  InverseTangentCoefficients k;
+  if (t2 < 0.09) {  // t < 0.3
     const double c[5] = {1.0 / 720.0, 1.0 / 30240.0, 1.0 / 1209600.0, 1.0 / 47900160.0,
                          691.0 / 1307674368000.0};  // t^2 .. t^10 of e
-    e = 1.0 / 12.0 + t2 * (c[0] + t2 * (c[1] + t2 * (c[2] + t2 * (c[3] + t2 * c[4]))));
-    dEoverT = 2 * c[0] + t2 * (4 * c[1] + t2 * (6 * c[2] + t2 * (8 * c[3] + t2 * 10 * c[4])));
+    k.e = 1.0 / 12.0 + t2 * (c[0] + t2 * (c[1] + t2 * (c[2] + t2 * (c[3] + t2 * c[4]))));
+    k.dEoverT = 2 * c[0] + t2 * (4 * c[1] + t2 * (6 * c[2] + t2 * (8 * c[3] + t2 * 10 * c[4])));
   } else {
-    const double cotHalf = 1.0 / std::tan(0.5 * t), sinHalf = std::sin(0.5 * t);
-    e = (1.0 - 0.5 * t * cotHalf) / t2;
-    dEoverT = -2.0 / (t2 * t2) + cotHalf / (2.0 * t2 * t) + 1.0 / (4.0 * t2 * sinHalf * sinHalf);
+    const double t = std::sqrt(t2), cotHalf = 1.0 / std::tan(0.5 * t), sinHalf = std::sin(0.5 * t);
+    k.e = (1.0 - 0.5 * t * cotHalf) / t2;
+    k.dEoverT = -2.0 / (t2 * t2) + cotHalf / (2.0 * t2 * t) + 1.0 / (4.0 * t2 * sinHalf * sinHalf);
   }
-  const Mat3 S = skew(theta), dS = skew(dtheta);
-  return 0.5 * dS + e * (dS * S + S * dS) + dEoverT * theta.dot(dtheta) * S * S;
+  return k;
+}
+
+// T^-1 itself, with S^2 = theta theta^T - t^2 I (the series keeps e exact to
+// round-off where the closed form of math/rotation.cpp cancels).
+Mat3 inverseTangent(const Vec3& theta, const InverseTangentCoefficients& k) {
+  Mat3 Tinv = k.e * theta * theta.transpose() + 0.5 * skew(theta);
+  Tinv.diagonal().array() += 1.0 - k.e * theta.squaredNorm();
+  return Tinv;
+}
+
+// The derivative applied to a vector x, as a linear map of dtheta:
+// dT^-1 x = J dtheta, or with transposed dT^-T x = J dtheta, where
+//   J = -+ skew(x)/2 - e (skew(theta x x) + S skew(x)) + (e'/t) (S^2 x) theta^T.
+Mat3 inverseTangentVariation(const Vec3& theta, const InverseTangentCoefficients& k, const Vec3& x,
+                             bool transposed) {
+  const Mat3 S = skew(theta), X = skew(x);
+  const Vec3 SSx = theta.cross(theta.cross(x));
+  return (transposed ? 0.5 : -0.5) * X - k.e * (skew(theta.cross(x)) + S * X) + k.dEoverT * SSx * theta.transpose();
 }
 
 // ---------------------------------------------------------------------------
@@ -80,17 +101,45 @@ struct Kinematics {
   bool valid = false;
   Mat3 A[2], R[2];  // node orientations; node copies of the element frame A_i C_i
   Vec3 e1, e2, e3;  // corotated frame (world)
-  double l = 0.0;
+  double l = 0.0, inverseLength = 0.0;
   Vec3 q[2], qMean;
   double qx = 0.0, qy = 0.0, eta = 0.0;  // qMean = qx e1 + qy e2, eta = qx/qy
   Vec3 theta[2];                         // local rotations log(Rr^T R_i)
+  InverseTangentCoefficients tangentCoefficients[2];
   Mat3 Tinv[2];
   double u = 0.0;  // elongation
-  // Tangent maps, all acting on dq = [dr1; dtheta1; dr2; dtheta2]:
-  Mat3x12 P;     // spin of the corotated frame (world), dw_r = P dq
+  // Spin of the corotated frame, dw_r = P dq on dq = [dr1; dtheta1; dr2; dtheta2],
+  // P = [-Pr, e1 twist_1^T, Pr, e1 twist_2^T], applied from e_j and twist_i
+  // alone where only products are needed (residuals).
+  Vec3 twist[2];
+  // Tangent maps in full (only the tangent needs them, see tangentMaps):
+  Mat3 Pr;
+  Mat3x12 P;     // dw_r = P dq
   Mat3x12 X[2];  // R_i^T (dw_i - dw_r) = X_i dq, so dtheta_i = Tinv_i X_i dq
   Mat7x12 B;     // de_l = B dq
 };
+
+// Chord part of the frame spin, dw_r = Pr (dr2 - dr1) + ...: the components
+// e2.dw_r = -e3.(dr2-dr1)/l, e3.dw_r = e2.(dr2-dr1)/l of the chord's rotation
+// and the chord part -eta e3.(dr2-dr1)/l of the twist e1.dw_r:
+//   l Pr = -eta e1 e3^T - e2 e3^T + e3 e2^T.
+Mat3 chordSpin(const Kinematics& k) {
+  return (-k.eta * k.e1 * k.e3.transpose() - k.e2 * k.e3.transpose() + k.e3 * k.e2.transpose()) *
+         k.inverseLength;
+}
+
+// Pr d and Pr^T w without forming Pr.
+Vec3 chordSpinTimes(const Kinematics& k, const Vec3& d) {
+  return (k.e3 * k.e2.dot(d) - (k.eta * k.e1 + k.e2) * k.e3.dot(d)) * k.inverseLength;
+}
+
+Vec3 chordSpinTransposeTimes(const Kinematics& k, const Vec3& w) {
+  return (k.e2 * k.e3.dot(w) - k.e3 * (k.eta * k.e1.dot(w) + k.e2.dot(w))) * k.inverseLength;
+}
+
+// Twist part of the frame spin: e1.dw_r gets (q_i x e3).dw_i / (2 qy) from
+// node i's world spin dw_i (rotation of q's projection about e1).
+Vec3 twistRow(const Kinematics& k, int i) { return k.q[i].cross(k.e3) / (2.0 * k.qy); }
 
 Kinematics corotatedFrame(const CorotationalBeam& beam, const NodePose& n1,
                           const NodePose& n2) {
@@ -102,7 +151,8 @@ Kinematics corotatedFrame(const CorotationalBeam& beam, const NodePose& n1,
   const Vec3 x = n2.r - n1.r;
   k.l = x.norm();
   if (!(k.l > 1e-9 * beam.L0)) return k;
-  k.e1 = x / k.l;
+  k.inverseLength = 1.0 / k.l;
+  k.e1 = x * k.inverseLength;
   k.q[0] = k.R[0].col(1);
   k.q[1] = k.R[1].col(1);
   k.qMean = 0.5 * (k.q[0] + k.q[1]);
@@ -119,7 +169,10 @@ Kinematics corotatedFrame(const CorotationalBeam& beam, const NodePose& n1,
   Rr << k.e1, k.e2, k.e3;
   for (int i = 0; i < 2; ++i) {
     k.theta[i] = logSO3(Rr.transpose() * k.R[i]);
-    k.Tinv[i] = tangentSO3Inverse(k.theta[i]);
+    k.tangentCoefficients[i] = inverseTangentCoefficients(k.theta[i]);
+    k.Tinv[i] = inverseTangent(k.theta[i], k.tangentCoefficients[i]);
+    // dw_i = A_i dtheta_i, so e1.dw_r gets twistRow . A_i dtheta_i
+    k.twist[i] = k.A[i].transpose() * twistRow(k, i);
   }
   // l - L0 without cancellation when l ~ L0
   k.u = (x.squaredNorm() - beam.L0 * beam.L0) / (k.l + beam.L0);
@@ -127,26 +180,50 @@ Kinematics corotatedFrame(const CorotationalBeam& beam, const NodePose& n1,
   return k;
 }
 
-// Chord part of the frame spin, dw_r = Pr (dr2 - dr1) + ...: the components
-// e2.dw_r = -e3.(dr2-dr1)/l, e3.dw_r = e2.(dr2-dr1)/l of the chord's rotation
-// and the chord part -eta e3.(dr2-dr1)/l of the twist e1.dw_r.
-Mat3 chordSpin(const Vec3& e1, const Vec3& e2, const Vec3& e3, double eta, double l) {
-  return (-eta * e1 * e3.transpose() - e2 * e3.transpose() + e3 * e2.transpose()) / l;
+// P dq and P^T w from the compact form (no 3 x 12 products).
+Vec3 frameSpin(const Kinematics& k, const Vec12& dq) {
+  return chordSpinTimes(k, dq.segment<3>(6) - dq.segment<3>(0)) +
+         k.e1 * (k.twist[0].dot(dq.segment<3>(3)) + k.twist[1].dot(dq.segment<3>(9)));
 }
 
-// Twist part of the frame spin: e1.dw_r gets (q_i x e3).dw_i / (2 qy) from
-// node i's world spin dw_i (rotation of q's projection about e1).
-Vec3 twistRow(const Kinematics& k, int i) { return k.q[i].cross(k.e3) / (2.0 * k.qy); }
+Vec12 frameSpinTranspose(const Kinematics& k, const Vec3& w) {
+  const Vec3 chord = chordSpinTransposeTimes(k, w);
+  const double axial = k.e1.dot(w);
+  Vec12 out;
+  out << -chord, axial * k.twist[0], chord, axial * k.twist[1];
+  return out;
+}
+
+// de_l = B dq without forming B: du = e1.(dr2 - dr1) and
+// dtheta_i = Tinv_i X_i dq = Tinv_i (C_i^T dtheta_i - R_i^T P dq).
+Vec7 strainIncrement(const CorotationalBeam& beam, const Kinematics& k, const Vec12& dq) {
+  const Vec3 spin = frameSpin(k, dq);
+  Vec7 de;
+  de[0] = k.e1.dot(dq.segment<3>(6) - dq.segment<3>(0));
+  de.segment<3>(1) = k.Tinv[0] * (beam.C1.transpose() * dq.segment<3>(3) - k.R[0].transpose() * spin);
+  de.segment<3>(4) = k.Tinv[1] * (beam.C2.transpose() * dq.segment<3>(9) - k.R[1].transpose() * spin);
+  return de;
+}
+
+// f = B^T f_l without forming B: with m_i = Tinv_i^T f_l,i,
+// X_i^T m_i = E_i^T C_i m_i - P^T R_i m_i (E_i picks node i's rotation).
+Vec12 strainMapTranspose(const CorotationalBeam& beam, const Kinematics& k, const Vec7& fl) {
+  const Vec3 m1 = k.Tinv[0].transpose() * fl.segment<3>(1);
+  const Vec3 m2 = k.Tinv[1].transpose() * fl.segment<3>(4);
+  Vec12 f = frameSpinTranspose(k, -(k.R[0] * m1 + k.R[1] * m2));
+  f.segment<3>(0) -= fl[0] * k.e1;
+  f.segment<3>(3) += beam.C1 * m1;
+  f.segment<3>(6) += fl[0] * k.e1;
+  f.segment<3>(9) += beam.C2 * m2;
+  return f;
+}
 
 void tangentMaps(const CorotationalBeam& beam, Kinematics& k) {
-  const Mat3 Pr = chordSpin(k.e1, k.e2, k.e3, k.eta, k.l);
+  k.Pr = chordSpin(k);
   k.P.setZero();
-  k.P.block<3, 3>(0, 0) = -Pr;
-  k.P.block<3, 3>(0, 6) = Pr;
-  for (int i = 0; i < 2; ++i) {
-    // dw_i = A_i dtheta_i
-    k.P.block<3, 3>(0, 3 + 6 * i) = k.e1 * (k.A[i].transpose() * twistRow(k, i)).transpose();
-  }
+  k.P.block<3, 3>(0, 0) = -k.Pr;
+  k.P.block<3, 3>(0, 6) = k.Pr;
+  for (int i = 0; i < 2; ++i) k.P.block<3, 3>(0, 3 + 6 * i) = k.e1 * k.twist[i].transpose();
   const Mat3 C[2] = {beam.C1, beam.C2};
   k.B.setZero();
   k.B.block<1, 3>(0, 0) = -k.e1.transpose();
@@ -159,50 +236,118 @@ void tangentMaps(const CorotationalBeam& beam, Kinematics& k) {
   }
 }
 
-// Directional derivative of B along the increment dq (same increments as the
-// tangent), obtained by varying every quantity in tangentMaps.
-Mat7x12 strainMapVariation(const Kinematics& k, const Vec12& dq) {
-  const Vec3 dr = dq.segment<3>(6) - dq.segment<3>(0);
-  const Vec3 dth[2] = {dq.segment<3>(3), dq.segment<3>(9)};
-  const Vec3 dw[2] = {k.A[0] * dth[0], k.A[1] * dth[1]};
-  const Vec3 dwr = k.P * dq;
-  const Vec3 de1 = dwr.cross(k.e1), de2 = dwr.cross(k.e2), de3 = dwr.cross(k.e3);
-  const double dl = k.e1.dot(dr);
-  const Vec3 dqi[2] = {dw[0].cross(k.q[0]), dw[1].cross(k.q[1])};
-  const Vec3 dqMean = 0.5 * (dqi[0] + dqi[1]);
-  const double dqx = dqMean.dot(k.e1) + k.qMean.dot(de1);
-  const double dqy = dqMean.dot(k.e2) + k.qMean.dot(de2);
-  const double deta = (dqx - k.eta * dqy) / k.qy;
+// Derivatives of the frame quantities of tangentMaps along all twelve
+// increments at once (one column per increment), varied term by term:
+//   de_j = dw_r x e_j,  dq_i = dw_i x q_i,  dl = e1.(dr2 - dr1),
+//   deta = (dqx - eta dqy) / qy,  dtwist_i = A_i^T dt_i - dtheta_i x twist_i.
+using Row12 = Eigen::Matrix<double, 1, 12>;
 
-  // l Pr = -eta e1 e3^T - e2 e3^T + e3 e2^T, varied term by term
-  const Mat3 dE13 = de1 * k.e3.transpose() + k.e1 * de3.transpose();
-  const Mat3 dE23 = de2 * k.e3.transpose() + k.e2 * de3.transpose();
-  const Mat3 dPr = (-dl * chordSpin(k.e1, k.e2, k.e3, k.eta, k.l) -
-                    deta * k.e1 * k.e3.transpose() - k.eta * dE13 - dE23 + dE23.transpose()) / k.l;
-  Mat3x12 dP = Mat3x12::Zero();
-  dP.block<3, 3>(0, 0) = -dPr;
-  dP.block<3, 3>(0, 6) = dPr;
-  for (int i = 0; i < 2; ++i) {
-    const Vec3 t = twistRow(k, i);
-    const Vec3 dt =
-        -dqy / k.qy * t + (dqi[i].cross(k.e3) + k.q[i].cross(de3)) / (2.0 * k.qy);
-    const Vec3 AtT = k.A[i].transpose() * t;
-    // d(A^T t) = A^T dt - skew(dtheta) A^T t   (dA = A skew(dtheta))
-    const Vec3 dAtT = k.A[i].transpose() * dt - dth[i].cross(AtT);
-    dP.block<3, 3>(0, 3 + 6 * i) = de1 * AtT.transpose() + k.e1 * dAtT.transpose();
-  }
+struct FrameDerivatives {
+  Mat3x12 W[2];          // node spins dw_i = A_i dtheta_i (world)
+  Mat3x12 dE1, dE2, dE3;
+  Row12 dl, deta;
+  Mat3x12 dTwist[2];
+};
 
-  Mat7x12 dB = Mat7x12::Zero();
-  dB.block<1, 3>(0, 0) = -de1.transpose();
-  dB.block<1, 3>(0, 6) = de1.transpose();
+FrameDerivatives frameDerivatives(const Kinematics& k) {
+  FrameDerivatives d;
   for (int i = 0; i < 2; ++i) {
-    // X_i = C_i^T E_i - R_i^T P, dR_i^T = -R_i^T skew(dw_i)
-    const Mat3x12 dX = k.R[i].transpose() * (skew(dw[i]) * k.P - dP);
-    const Vec3 dtheta = k.B.middleRows<3>(1 + 3 * i) * dq;
-    dB.middleRows<3>(1 + 3 * i) =
-        inverseTangentDerivative(k.theta[i], dtheta) * k.X[i] + k.Tinv[i] * dX;
+    d.W[i].setZero();
+    d.W[i].block<3, 3>(0, 3 + 6 * i) = k.A[i];
   }
-  return dB;
+  d.dE1 = -skew(k.e1) * k.P;
+  d.dE2 = -skew(k.e2) * k.P;
+  d.dE3 = -skew(k.e3) * k.P;
+  d.dl.setZero();
+  d.dl.segment<3>(0) = -k.e1.transpose();
+  d.dl.segment<3>(6) = k.e1.transpose();
+  const Mat3x12 dQ[2] = {-skew(k.q[0]) * d.W[0], -skew(k.q[1]) * d.W[1]};
+  const Mat3x12 dQMean = 0.5 * (dQ[0] + dQ[1]);
+  const Row12 dqx = k.e1.transpose() * dQMean + k.qMean.transpose() * d.dE1;
+  const Row12 dqy = k.e2.transpose() * dQMean + k.qMean.transpose() * d.dE2;
+  d.deta = (dqx - k.eta * dqy) / k.qy;
+  for (int i = 0; i < 2; ++i) {
+    // t_i = q_i x e3 / (2 qy)
+    const Mat3x12 dT = -twistRow(k, i) * dqy / k.qy + (-skew(k.e3) * dQ[i] + skew(k.q[i]) * d.dE3) / (2.0 * k.qy);
+    d.dTwist[i] = k.A[i].transpose() * dT;
+    d.dTwist[i].block<3, 3>(0, 3 + 6 * i) += skew(k.twist[i]);
+  }
+  return d;
+}
+
+// d(Pr^T w) and d(Pr x) for fixed w, x, from
+// l Pr = -eta e1 e3^T - e2 e3^T + e3 e2^T (and dl Pr from the 1/l).
+Mat3x12 chordSpinTransposeDerivative(const Kinematics& k, const FrameDerivatives& d, const Vec3& w) {
+  const double w1 = k.e1.dot(w), w2 = k.e2.dot(w), w3 = k.e3.dot(w);
+  const Mat3x12 dLPrTw = -w1 * k.e3 * d.deta - k.eta * (k.e3 * (w.transpose() * d.dE1) + w1 * d.dE3) -
+                         k.e3 * (w.transpose() * d.dE2) - w2 * d.dE3 + w3 * d.dE2 + k.e2 * (w.transpose() * d.dE3);
+  return (dLPrTw - (k.Pr.transpose() * w) * d.dl) * k.inverseLength;
+}
+
+Mat3x12 chordSpinDerivative(const Kinematics& k, const FrameDerivatives& d, const Vec3& x) {
+  const double x2 = k.e2.dot(x), x3 = k.e3.dot(x);
+  const Mat3x12 dLPrx = -x3 * k.e1 * d.deta - k.eta * (x3 * d.dE1 + k.e1 * (x.transpose() * d.dE3)) - x3 * d.dE2 -
+                        k.e2 * (x.transpose() * d.dE3) + k.e3 * (x.transpose() * d.dE2) + x2 * d.dE3;
+  return (dLPrx - (k.Pr * x) * d.dl) * k.inverseLength;
+}
+
+// d(P^T w) (12 x 12) and d(P x) (3 x 12) of the compact form
+// P = [-Pr, e1 twist_1^T, Pr, e1 twist_2^T].
+Mat12 frameSpinTransposeDerivative(const Kinematics& k, const FrameDerivatives& d, const Vec3& w) {
+  const Mat3x12 chord = chordSpinTransposeDerivative(k, d, w);
+  const Row12 dAxial = w.transpose() * d.dE1;
+  const double axial = k.e1.dot(w);
+  Mat12 out;
+  out << -chord, k.twist[0] * dAxial + axial * d.dTwist[0], chord, k.twist[1] * dAxial + axial * d.dTwist[1];
+  return out;
+}
+
+Mat3x12 frameSpinDerivative(const Kinematics& k, const FrameDerivatives& d, const Vec12& x) {
+  const Vec3 th[2] = {x.segment<3>(3), x.segment<3>(9)};
+  return chordSpinDerivative(k, d, x.segment<3>(6) - x.segment<3>(0)) +
+         d.dE1 * (k.twist[0].dot(th[0]) + k.twist[1].dot(th[1])) +
+         k.e1 * (th[0].transpose() * d.dTwist[0] + th[1].transpose() * d.dTwist[1]);
+}
+
+// Geometric part of the tangent, d(B^T)/dq f_l; with damping also the
+// position dependence of edot = B(q) v at fixed v. Both exact.
+// dB = [-de1^T 0 de1^T 0; dT^-1_i X_i + T^-1_i dX_i] with
+// dX_i = R_i^T (skew(dw_i) P - dP), contracted with f_l (and v) directly:
+//   dB^T f_l = f_l,0 [-de1; 0; de1; 0] + sum_i (E_i^T C_i y_i - P^T R_i y_i)
+//              + P^T sum_i (s_i x dw_i) - dP^T (s_1 + s_2),
+// y_i = dT^-1_i^T f_l,i = J_i dtheta_i, s_i = R_i T^-1_i^T f_l,i, E_i picking
+// node i's rotation.
+void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, const Vec7& fl, const Vec12& v,
+                           double dampingBeta, const Eigen::Matrix<double, 12, 7>& BtKl, Mat12& K) {
+  const FrameDerivatives d = frameDerivatives(k);
+  const Mat3 C[2] = {beam.C1, beam.C2};
+  Mat3x12 dStrain[2], spin;  // dtheta_i = B_i dq; what P^T acts on
+  Mat12 G = Mat12::Zero();
+  spin.setZero();
+  Vec3 sSum = Vec3::Zero();
+  for (int i = 0; i < 2; ++i) {
+    const Vec3 flRotation = fl.segment<3>(1 + 3 * i);
+    const Vec3 s = k.R[i] * (k.Tinv[i].transpose() * flRotation);
+    sSum += s;
+    dStrain[i] = k.B.middleRows<3>(1 + 3 * i);
+    const Mat3x12 Y = inverseTangentVariation(k.theta[i], k.tangentCoefficients[i], flRotation, true) * dStrain[i];
+    G.middleRows<3>(3 + 6 * i) += C[i] * Y;
+    spin += skew(s) * d.W[i] - k.R[i] * Y;
+  }
+  G.middleRows<3>(0) -= fl[0] * d.dE1;
+  G.middleRows<3>(6) += fl[0] * d.dE1;
+  K += G + k.P.transpose().lazyProduct(spin) - frameSpinTransposeDerivative(k, d, sSum);
+  if (dampingBeta == 0.0) return;
+  // d(B v) = [(v2 - v1)^T de1; dT^-1_i X_i v + T^-1_i R_i^T (dw_i x P v - dP v)]
+  const Vec3 spinRate = frameSpin(k, v);
+  const Mat3x12 dSpinRate = frameSpinDerivative(k, d, v);
+  Eigen::Matrix<double, 7, 12> dStrainRate;
+  dStrainRate.row(0) = (v.segment<3>(6) - v.segment<3>(0)).transpose() * d.dE1;
+  for (int i = 0; i < 2; ++i)
+    dStrainRate.middleRows<3>(1 + 3 * i) =
+        inverseTangentVariation(k.theta[i], k.tangentCoefficients[i], k.X[i] * v, false) * dStrain[i] +
+        k.Tinv[i] * (k.R[i].transpose() * (-skew(spinRate) * d.W[i] - dSpinRate));
+  K += dampingBeta * BtKl.lazyProduct(dStrainRate);
 }
 
 Vec7 localDeformationVector(const Kinematics& k) {
@@ -251,33 +396,51 @@ LocalDeformation localDeformation(const CorotationalBeam& beam, const NodePose& 
   return d;
 }
 
+namespace {
+
+// f_l = K_l e_l + beta K_l edot_l, edot_l = B [v1; omega1; v2; omega2].
+Vec7 localForce(const CorotationalBeam& beam, const Kinematics& k, const Vec12& v, double dampingBeta) {
+  const Mat7& Kl = beam.localStiffness;
+  Vec7 fl = Kl * localDeformationVector(k);
+  if (dampingBeta != 0.0) fl += dampingBeta * (Kl * strainIncrement(beam, k, v));
+  return fl;
+}
+
+Vec12 nodeVelocities(const NodeVelocity& v1, const NodeVelocity& v2) {
+  Vec12 v;
+  v << v1.v, v1.omega, v2.v, v2.omega;
+  return v;
+}
+
+}  // namespace
+
+bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
+                         const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta, Vec12& f) {
+  const Kinematics k = corotatedFrame(beam, n1, n2);
+  if (!k.valid) return false;
+  f = strainMapTranspose(beam, k, localForce(beam, k, nodeVelocities(v1, v2), dampingBeta));
+  return f.allFinite();
+}
+
 BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
                           const NodePose& n2, const NodeVelocity& v1,
                           const NodeVelocity& v2, double dampingBeta, bool withTangent) {
   BeamForces out;
   Kinematics k = corotatedFrame(beam, n1, n2);
   if (!k.valid) return out;
-  tangentMaps(beam, k);
-  const Mat7& Kl = beam.localStiffness;
-  Vec12 v;
-  v << v1.v, v1.omega, v2.v, v2.omega;
-  const Vec7 eDot = k.B * v;  // rates of the local deformations
-  const Vec7 fl = Kl * localDeformationVector(k) + dampingBeta * (Kl * eDot);
-  out.f = k.B.transpose() * fl;
+  const Vec12 v = nodeVelocities(v1, v2);
+  const Vec7 fl = localForce(beam, k, v, dampingBeta);
+  out.f = strainMapTranspose(beam, k, fl);
   if (!withTangent) {
     out.valid = out.f.allFinite();
     return out;
   }
-  const Eigen::Matrix<double, 12, 7> BtKl = k.B.transpose() * Kl;
-  out.C = dampingBeta * BtKl * k.B;
-  out.K = BtKl * k.B;
-  // Geometric part d(B^T)/dq f_l, column by column; with damping also the
-  // position dependence of edot = B(q) v at fixed v. Both exact.
-  for (int c = 0; c < 12; ++c) {
-    const Mat7x12 dB = strainMapVariation(k, Vec12::Unit(c));
-    out.K.col(c) += dB.transpose() * fl;
-    if (dampingBeta != 0.0) out.K.col(c) += dampingBeta * BtKl * (dB * v);
-  }
+  tangentMaps(beam, k);
+  // Small products: coefficient-wise (lazyProduct), not Eigen's blocked GEMM.
+  const Eigen::Matrix<double, 12, 7> BtKl = k.B.transpose().lazyProduct(beam.localStiffness);
+  out.K = BtKl.lazyProduct(k.B);
+  out.C = dampingBeta * out.K;
+  addGeometricStiffness(beam, k, fl, v, dampingBeta, BtKl, out.K);
   out.valid = out.f.allFinite() && out.K.allFinite();
   return out;
 }

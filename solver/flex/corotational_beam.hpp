@@ -78,6 +78,11 @@ BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
                           const NodeVelocity& v2, double dampingBeta,
                           bool withTangent = true);  // false: f only (residual evaluations)
 
+// The internal force f of internalForces alone, for residual evaluations
+// (no tangent maps). Returns false when the corotated frame is undefined.
+bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
+                         const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta, Vec12& f);
+
 // Stress resultants at the element ends in the corotated element frame,
 // force (N, Vy, Vz) and moment (T, My, Mz); at each end the action of the
 // part at larger x on the part at smaller x (N > 0 in tension), computed

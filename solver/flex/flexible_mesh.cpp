@@ -75,8 +75,13 @@ void scatter(const FlexNode& n, const Vec6& g, VectorXd& r) {
 }
 
 // Adds P_a^T B P_b to the triplets for a 6 x 6 block B coupling nodes a, b.
+// Free nodes (most of a mesh) have P = I: no product needed (and P^T B P
+// would give B exactly anyway).
 void scatter(const FlexNode& a, const FlexNode& b, const Mat6& B, Triplets& out) {
-  const Mat6 projected = a.P.transpose() * B * b.P;
+  const bool freeA = a.P == Mat6::Identity(), freeB = b.P == Mat6::Identity();
+  Mat6 projected;
+  if (freeA && freeB) projected = B;
+  else projected = a.P.transpose() * B * b.P;
   for (int i = 0; i < 6; ++i) {
     if (a.dof[i] < 0) continue;
     for (int j = 0; j < 6; ++j)
@@ -91,15 +96,15 @@ bool flexibleResidual(const FlexibleMesh& mesh, const std::vector<NodeState>& no
   for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
     const FlexNode& n = mesh.nodes[i];
     Vec6 g = -nodalGravityForce(n.inertia, gravity);
-    if (withInertia) g += nodalInertiaForces(n.inertia, nodes[i].velocity, nodes[i].acceleration).f;
+    if (withInertia) g += nodalInertiaForce(n.inertia, nodes[i].velocity, nodes[i].acceleration);
     scatter(n, g, r);
   }
   for (const FlexElement& e : mesh.elements) {
     const NodeState &s1 = nodes[e.node1], &s2 = nodes[e.node2];
-    const BeamForces f = internalForces(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping, false);
-    if (!f.valid) return false;
-    scatter(mesh.nodes[e.node1], f.f.head<6>(), r);
-    scatter(mesh.nodes[e.node2], f.f.tail<6>(), r);
+    Vec12 f;
+    if (!internalForceVector(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping, f)) return false;
+    scatter(mesh.nodes[e.node1], f.head<6>(), r);
+    scatter(mesh.nodes[e.node2], f.tail<6>(), r);
   }
   for (const FlexLoad& l : mesh.loads) scatter(mesh.nodes[l.node], -loadVector(l, nodes[l.node], inputs, t), r);
   return true;

@@ -56,6 +56,10 @@ NodalInertiaForces nodalInertiaForces(const NodalInertia& inertia,
                                       const NodeVelocity& velocity,
                                       const NodeAcceleration& acceleration);
 
+// The force f alone (residual evaluations need no tangents).
+Vec6 nodalInertiaForce(const NodalInertia& inertia, const NodeVelocity& velocity,
+                       const NodeAcceleration& acceleration);
+
 // Weight of the nodal body as an applied generalized force [m g; 0]
 // (g in world, the node is its own centre of mass).
 Vec6 nodalGravityForce(const NodalInertia& inertia, const Vec3& gravity);

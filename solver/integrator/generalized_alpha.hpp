@@ -29,7 +29,6 @@ class GeneralizedAlpha : public TimeStepper {
 
   double alphaM_, alphaF_, gamma_, beta_;
   LinearSolver solver_;
-  int patternSize_ = -1;
   double factoredStep_ = 0.0;  // substep size of the current factorization; 0 = none
 };
 

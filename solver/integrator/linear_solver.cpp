@@ -1,9 +1,37 @@
 #include "integrator/linear_solver.hpp"
 
+#include <algorithm>
+
 #include <Eigen/Dense>
 #include <Eigen/KLUSupport>
 
 namespace mfbd {
+
+bool SparseAssembly::assign(int size, const std::vector<Eigen::Triplet<double>>& triplets) {
+  const Eigen::Index n = size;
+  bool samePattern = matrix_.rows() == n && positions_.size() == triplets.size();
+  for (std::size_t k = 0; samePattern && k < triplets.size(); ++k)
+    samePattern = positions_[k] == triplets[k].row() + n * triplets[k].col();
+  if (samePattern) {
+    double* values = matrix_.valuePtr();
+    std::fill(values, values + matrix_.nonZeros(), 0.0);
+    for (std::size_t k = 0; k < triplets.size(); ++k) values[slots_[k]] += triplets[k].value();
+    return false;
+  }
+  matrix_.resize(size, size);
+  matrix_.setFromTriplets(triplets.begin(), triplets.end());
+  matrix_.makeCompressed();
+  positions_.resize(triplets.size());
+  slots_.resize(triplets.size());
+  const int* outer = matrix_.outerIndexPtr();
+  const int* inner = matrix_.innerIndexPtr();
+  for (std::size_t k = 0; k < triplets.size(); ++k) {
+    const int row = triplets[k].row(), col = triplets[k].col();
+    positions_[k] = row + n * col;
+    slots_[k] = int(std::lower_bound(inner + outer[col], inner + outer[col + 1], row) - inner);
+  }
+  return true;
+}
 
 struct LinearSolver::Impl {
   bool sparse = false;

@@ -3,12 +3,30 @@
 // Dense LU below a size threshold, KLU (SuiteSparse) above.
 #pragma once
 #include <memory>
+#include <vector>
 
 #include <Eigen/SparseCore>
 
 namespace mfbd {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+// Triplets -> compressed matrix with a pattern that is kept: the first
+// assembly sorts the triplets and records the value slot of each; later
+// assemblies with the same triplet positions (the same element blocks in the
+// same order) only add the values into their slots, summing duplicates in
+// the same order as setFromTriplets, so the matrix is bit-identical to it.
+class SparseAssembly {
+ public:
+  // Returns true when the pattern is new (a new symbolic analysis is due).
+  bool assign(int size, const std::vector<Eigen::Triplet<double>>& triplets);
+  const SparseMatrix& matrix() const { return matrix_; }
+
+ private:
+  SparseMatrix matrix_;
+  std::vector<Eigen::Index> positions_;  // row + size * col of each triplet of the kept pattern
+  std::vector<int> slots_;               // its index into matrix_.valuePtr()
+};
 
 class LinearSolver {
  public:

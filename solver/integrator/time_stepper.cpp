@@ -6,10 +6,11 @@
 
 namespace mfbd {
 
-SparseMatrix TimeStepper::iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC,
-                                          double cK, bool regularize) {
+void TimeStepper::iterationTriplets(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
+                                    bool regularize, Triplets& all, Triplets& jacobian) {
   const int n = system.velocityCount(), m = system.constraintCount();
-  Triplets all, jacobian;
+  all.clear();
+  jacobian.clear();
   system.tangent(at.t, at.q, at.v, at.vdot, at.lambda, cM, cC, cK, all, jacobian);
   all.reserve(all.size() + 2 * jacobian.size() + n + m);
   for (const auto& t : jacobian) {
@@ -31,10 +32,23 @@ SparseMatrix TimeStepper::iterationMatrix(Dynamics& system, const IntegratorStat
     const double eps = !regularize ? 0.0 : sMax > 0.0 ? 1e-8 * gMax * gMax / sMax : 1e-8;
     for (int i = n; i < n + m; ++i) all.emplace_back(i, i, -eps);
   }
-  SparseMatrix S(n + m, n + m);
+}
+
+SparseMatrix TimeStepper::iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC,
+                                          double cK, bool regularize) {
+  const int size = system.velocityCount() + system.constraintCount();
+  Triplets all, jacobian;
+  iterationTriplets(system, at, cM, cC, cK, regularize, all, jacobian);
+  SparseMatrix S(size, size);
   S.setFromTriplets(all.begin(), all.end());
   S.makeCompressed();
   return S;
+}
+
+bool TimeStepper::assembleIterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC,
+                                          double cK) {
+  iterationTriplets(system, at, cM, cC, cK, true, iterationTriplets_, jacobianTriplets_);
+  return iteration_.assign(system.velocityCount() + system.constraintCount(), iterationTriplets_);
 }
 
 AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double tEnd) {

@@ -51,8 +51,20 @@ class TimeStepper {
   // (eps = 0 with regularize false).
   static SparseMatrix iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
                                       bool regularize = true);
+  // The same (regularised) matrix into assembledIterationMatrix(), reusing
+  // the pattern and the triplet storage of the previous call; true when the
+  // pattern is new and needs a symbolic analysis.
+  bool assembleIterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK);
+  const SparseMatrix& assembledIterationMatrix() const { return iteration_.matrix(); }
 
   SolverOptions options_;
+
+ private:
+  static void iterationTriplets(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
+                                bool regularize, Triplets& all, Triplets& jacobian);
+
+  Triplets iterationTriplets_, jacobianTriplets_;
+  SparseAssembly iteration_;
 };
 
 }  // namespace mfbd
