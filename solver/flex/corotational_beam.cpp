@@ -9,6 +9,7 @@ namespace {
 
 using Mat3x12 = Eigen::Matrix<double, 3, 12>;
 using Mat7x12 = Eigen::Matrix<double, 7, 12>;
+using Row12 = Eigen::Matrix<double, 1, 12>;
 
 // ---------------------------------------------------------------------------
 // Local linear Timoshenko stiffness on e_l = [u; theta1; theta2].
@@ -240,10 +241,9 @@ void tangentMaps(const CorotationalBeam& beam, Kinematics& k) {
 // increments at once (one column per increment), varied term by term:
 //   de_j = dw_r x e_j,  dq_i = dw_i x q_i,  dl = e1.(dr2 - dr1),
 //   deta = (dqx - eta dqy) / qy,  dtwist_i = A_i^T dt_i - dtheta_i x twist_i.
-using Row12 = Eigen::Matrix<double, 1, 12>;
-
+// Node spins dw_i = A_i dtheta_i touch only node i's rotation columns: those
+// products are taken on that 3 x 3 block alone.
 struct FrameDerivatives {
-  Mat3x12 W[2];          // node spins dw_i = A_i dtheta_i (world)
   Mat3x12 dE1, dE2, dE3;
   Row12 dl, deta;
   Mat3x12 dTwist[2];
@@ -251,24 +251,23 @@ struct FrameDerivatives {
 
 FrameDerivatives frameDerivatives(const Kinematics& k) {
   FrameDerivatives d;
-  for (int i = 0; i < 2; ++i) {
-    d.W[i].setZero();
-    d.W[i].block<3, 3>(0, 3 + 6 * i) = k.A[i];
-  }
   d.dE1 = -skew(k.e1) * k.P;
   d.dE2 = -skew(k.e2) * k.P;
   d.dE3 = -skew(k.e3) * k.P;
   d.dl.setZero();
   d.dl.segment<3>(0) = -k.e1.transpose();
   d.dl.segment<3>(6) = k.e1.transpose();
-  const Mat3x12 dQ[2] = {-skew(k.q[0]) * d.W[0], -skew(k.q[1]) * d.W[1]};
-  const Mat3x12 dQMean = 0.5 * (dQ[0] + dQ[1]);
-  const Row12 dqx = k.e1.transpose() * dQMean + k.qMean.transpose() * d.dE1;
-  const Row12 dqy = k.e2.transpose() * dQMean + k.qMean.transpose() * d.dE2;
+  const Mat3 dQ[2] = {-skew(k.q[0]) * k.A[0], -skew(k.q[1]) * k.A[1]};  // dq_i on node i's dtheta_i
+  Row12 dqx = k.qMean.transpose() * d.dE1, dqy = k.qMean.transpose() * d.dE2;
+  for (int i = 0; i < 2; ++i) {
+    dqx.segment<3>(3 + 6 * i) += 0.5 * k.e1.transpose() * dQ[i];
+    dqy.segment<3>(3 + 6 * i) += 0.5 * k.e2.transpose() * dQ[i];
+  }
   d.deta = (dqx - k.eta * dqy) / k.qy;
   for (int i = 0; i < 2; ++i) {
     // t_i = q_i x e3 / (2 qy)
-    const Mat3x12 dT = -twistRow(k, i) * dqy / k.qy + (-skew(k.e3) * dQ[i] + skew(k.q[i]) * d.dE3) / (2.0 * k.qy);
+    Mat3x12 dT = -twistRow(k, i) * dqy / k.qy + skew(k.q[i]) * d.dE3 / (2.0 * k.qy);
+    dT.block<3, 3>(0, 3 + 6 * i) -= skew(k.e3) * dQ[i] / (2.0 * k.qy);
     d.dTwist[i] = k.A[i].transpose() * dT;
     d.dTwist[i].block<3, 3>(0, 3 + 6 * i) += skew(k.twist[i]);
   }
@@ -332,7 +331,8 @@ void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, co
     dStrain[i] = k.B.middleRows<3>(1 + 3 * i);
     const Mat3x12 Y = inverseTangentVariation(k.theta[i], k.tangentCoefficients[i], flRotation, true) * dStrain[i];
     G.middleRows<3>(3 + 6 * i) += C[i] * Y;
-    spin += skew(s) * d.W[i] - k.R[i] * Y;
+    spin -= k.R[i] * Y;
+    spin.block<3, 3>(0, 3 + 6 * i) += skew(s) * k.A[i];
   }
   G.middleRows<3>(0) -= fl[0] * d.dE1;
   G.middleRows<3>(6) += fl[0] * d.dE1;
@@ -343,10 +343,13 @@ void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, co
   const Mat3x12 dSpinRate = frameSpinDerivative(k, d, v);
   Eigen::Matrix<double, 7, 12> dStrainRate;
   dStrainRate.row(0) = (v.segment<3>(6) - v.segment<3>(0)).transpose() * d.dE1;
-  for (int i = 0; i < 2; ++i)
+  for (int i = 0; i < 2; ++i) {
+    Mat3x12 dRelativeSpin = -dSpinRate;  // dw_i x P v - dP v
+    dRelativeSpin.block<3, 3>(0, 3 + 6 * i) -= skew(spinRate) * k.A[i];
     dStrainRate.middleRows<3>(1 + 3 * i) =
         inverseTangentVariation(k.theta[i], k.tangentCoefficients[i], k.X[i] * v, false) * dStrain[i] +
-        k.Tinv[i] * (k.R[i].transpose() * (-skew(spinRate) * d.W[i] - dSpinRate));
+        k.Tinv[i] * (k.R[i].transpose() * dRelativeSpin);
+  }
   K += dampingBeta * BtKl.lazyProduct(dStrainRate);
 }
 

@@ -74,19 +74,26 @@ void scatter(const FlexNode& n, const Vec6& g, VectorXd& r) {
     if (n.dof[c] >= 0) r[n.dof[c]] += n.P.col(c).dot(g);
 }
 
-// Adds P_a^T B P_b to the triplets for a 6 x 6 block B coupling nodes a, b.
-// Free nodes (most of a mesh) have P = I: no product needed (and P^T B P
-// would give B exactly anyway).
-void scatter(const FlexNode& a, const FlexNode& b, const Mat6& B, Triplets& out) {
-  const bool freeA = a.P == Mat6::Identity(), freeB = b.P == Mat6::Identity();
-  Mat6 projected;
-  if (freeA && freeB) projected = B;
-  else projected = a.P.transpose() * B * b.P;
+// P = I: a free node (most of a mesh), whose blocks need no projection.
+bool isFree(const FlexNode& n) {
+  for (int c = 0; c < 6; ++c)
+    if (n.dof[c] < 0) return false;
+  return n.P == Mat6::Identity();
+}
+
+// Adds P_a^T B P_b to the triplets for a 6 x 6 block B coupling nodes a, b
+// (B itself when both are free: P^T B P would give B exactly anyway).
+void scatter(const FlexNode& a, const FlexNode& b, bool bothFree, const Mat6& B, Triplets& out) {
+  const Mat6 projected = bothFree ? B : Mat6(a.P.transpose() * B * b.P);
   for (int i = 0; i < 6; ++i) {
     if (a.dof[i] < 0) continue;
     for (int j = 0; j < 6; ++j)
       if (b.dof[j] >= 0) out.emplace_back(a.dof[i], b.dof[j], projected(i, j));
   }
+}
+
+void scatter(const FlexNode& a, const FlexNode& b, const Mat6& B, Triplets& out) {
+  scatter(a, b, isFree(a) && isFree(b), B, out);
 }
 
 }  // namespace
@@ -119,13 +126,19 @@ void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nod
   }
   for (const FlexElement& e : mesh.elements) {
     const NodeState &s1 = nodes[e.node1], &s2 = nodes[e.node2];
-    const BeamForces f = internalForces(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping);
-    const Mat12 S = cK * f.K + cC * f.C;
+    // A mass matrix alone (consistent initial accelerations) needs no element
+    // tangent; its zero blocks still go in, so the pattern is the same.
+    Mat12 S = Mat12::Zero();
+    if (cK != 0.0 || cC != 0.0) {
+      const BeamForces f = internalForces(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping);
+      S = cK * f.K + cC * f.C;
+    }
     const FlexNode &a = mesh.nodes[e.node1], &b = mesh.nodes[e.node2];
-    scatter(a, a, S.topLeftCorner<6, 6>(), iteration);
-    scatter(a, b, S.topRightCorner<6, 6>(), iteration);
-    scatter(b, a, S.bottomLeftCorner<6, 6>(), iteration);
-    scatter(b, b, S.bottomRightCorner<6, 6>(), iteration);
+    const bool freeA = isFree(a), freeB = isFree(b);
+    scatter(a, a, freeA, S.topLeftCorner<6, 6>(), iteration);
+    scatter(a, b, freeA && freeB, S.topRightCorner<6, 6>(), iteration);
+    scatter(b, a, freeA && freeB, S.bottomLeftCorner<6, 6>(), iteration);
+    scatter(b, b, freeB, S.bottomRightCorner<6, 6>(), iteration);
   }
   // Loads that turn with the node: d(-f_ext)/d[dr; dtheta].
   for (const FlexLoad& l : mesh.loads) {

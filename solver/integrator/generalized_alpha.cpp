@@ -133,8 +133,11 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     }
     // Modified Newton: a stale iteration matrix is refreshed when the
     // contraction slows; a fresh one that does not contract has failed.
-    if (k > 0 && size > 0.25 * previous) {
-      if (fresh && size > previous && size > 10.0 * floor) {
+    // Corrections within ten times the round-off floor stay with the current
+    // matrix: there a refresh (tangent and factorization, several iterations'
+    // worth) would save an iteration at most, and their rate is half noise.
+    if (k > 0 && size > 0.25 * previous && size > 10.0 * floor) {
+      if (fresh && size > previous) {
         std::ostringstream msg;
         msg << "Newton diverging (correction " << size << " after " << previous << ")";
         why = msg.str();

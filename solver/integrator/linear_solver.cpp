@@ -8,27 +8,29 @@
 namespace mfbd {
 
 bool SparseAssembly::assign(int size, const std::vector<Eigen::Triplet<double>>& triplets) {
-  const Eigen::Index n = size;
-  bool samePattern = matrix_.rows() == n && positions_.size() == triplets.size();
-  for (std::size_t k = 0; samePattern && k < triplets.size(); ++k)
-    samePattern = positions_[k] == triplets[k].row() + n * triplets[k].col();
-  if (samePattern) {
+  if (matrix_.rows() == size && entries_.size() == triplets.size()) {
+    // Add the values into their slots while checking the positions; a
+    // mismatch (a different pattern) falls through to a new assembly.
     double* values = matrix_.valuePtr();
     std::fill(values, values + matrix_.nonZeros(), 0.0);
-    for (std::size_t k = 0; k < triplets.size(); ++k) values[slots_[k]] += triplets[k].value();
-    return false;
+    std::size_t k = 0;
+    for (; k < triplets.size(); ++k) {
+      const Entry& e = entries_[k];
+      if (e.row != triplets[k].row() || e.col != triplets[k].col()) break;
+      values[e.slot] += triplets[k].value();
+    }
+    if (k == triplets.size()) return false;
   }
   matrix_.resize(size, size);
   matrix_.setFromTriplets(triplets.begin(), triplets.end());
   matrix_.makeCompressed();
-  positions_.resize(triplets.size());
-  slots_.resize(triplets.size());
+  entries_.resize(triplets.size());
   const int* outer = matrix_.outerIndexPtr();
   const int* inner = matrix_.innerIndexPtr();
   for (std::size_t k = 0; k < triplets.size(); ++k) {
     const int row = triplets[k].row(), col = triplets[k].col();
-    positions_[k] = row + n * col;
-    slots_[k] = int(std::lower_bound(inner + outer[col], inner + outer[col + 1], row) - inner);
+    const int slot = int(std::lower_bound(inner + outer[col], inner + outer[col + 1], row) - inner);
+    entries_[k] = {row, col, slot};
   }
   return true;
 }

@@ -23,9 +23,12 @@ class SparseAssembly {
   const SparseMatrix& matrix() const { return matrix_; }
 
  private:
+  struct Entry {
+    int row, col;  // of a triplet of the kept pattern
+    int slot;      // its index into matrix_.valuePtr()
+  };
   SparseMatrix matrix_;
-  std::vector<Eigen::Index> positions_;  // row + size * col of each triplet of the kept pattern
-  std::vector<int> slots_;               // its index into matrix_.valuePtr()
+  std::vector<Entry> entries_;
 };
 
 class LinearSolver {

@@ -1,0 +1,123 @@
+#!/usr/bin/env python3
+"""Per-step cost of the flexible mesh against the element count.
+
+Runs the C++ benchmark benchmarks/flexible_cost.cpp (a clamped cantilever of
+N corotational beam elements, the F3 scene with its tip pulse, advanced by
+mfbd::Simulation::doStep with implicit substeps h = 1e-3 and communication
+steps of 0.01 s over 0.2 s), compiling it first by hand (g++) against
+build/libmfbd_solver.a when the binary is missing or older than its sources.
+The C++ benchmark is used rather than the FMU through fmpy so that the FMI
+call overhead and the Python loop do not hide the solver's own cost at small N.
+
+Writes results/flexible_cost.csv (elements, wall time per substep and per
+element and substep, Newton iterations and factorizations per substep) and
+results/flexible_cost.png (cost per substep against N, log-log, with a line
+proportional to N through the measurements and the 0.5 us per element-step
+target). With --phases also results/flexible_cost_phases.csv from
+benchmarks/flexible_phases.cpp: one Newton iteration taken apart (residual,
+tangent, assembly, factorization, solve, retraction), ns per element.
+A study, not a test: nothing here asserts a time.
+"""
+import argparse
+import csv
+import io
+import pathlib
+import subprocess
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+BENCHMARKS = ROOT / "benchmarks"
+TARGET_US_PER_ELEMENT_STEP = 0.5  # the issue's target
+
+
+def compile_benchmark(build: pathlib.Path, name: str) -> pathlib.Path:
+    """benchmarks/<name>.cpp -> <build>/<name>, linked with the solver library."""
+    library = build / "libmfbd_solver.a"
+    if not library.exists():
+        sys.exit(f"{library} not found: build the project first (cmake --build {build})")
+    source = BENCHMARKS / f"{name}.cpp"
+    binary = build / name
+    inputs = [source, BENCHMARKS / "cantilever_scene.hpp", library]
+    if binary.exists() and binary.stat().st_mtime > max(p.stat().st_mtime for p in inputs):
+        return binary
+    command = ["g++", "-O2", "-DNDEBUG", "-std=c++17", "-I", str(ROOT / "solver"), "-isystem", "/usr/include/eigen3",
+               "-I", "/usr/include/suitesparse", str(source), str(library), "-lklu", "-o", str(binary)]
+    print(" ".join(command))
+    subprocess.run(command, check=True)
+    return binary
+
+
+def run(binary, args, extra=()):
+    command = [str(binary), "--elements", ",".join(map(str, args.elements)), "--duration", str(args.duration),
+               "--h", str(args.h), "--communication", str(args.communication), *extra]
+    out = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+    return list(csv.DictReader(io.StringIO(out)))
+
+
+def write_csv(path, header, rows):
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        w.writerows(rows)
+    print(f"wrote {path}")
+
+
+def plot(rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    n = np.array([float(r["elements"]) for r in rows])
+    step = np.array([float(r["us_per_step"]) for r in rows])
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    ax.loglog(n, step, "o-", label="measured")
+    # Linear reference: proportional to N, through the geometric mean of the points.
+    c = np.exp(np.mean(np.log(step / n)))
+    ax.loglog(n, c * n, "k--", lw=1, label=f"linear: {c:.2f} us x N")
+    ax.loglog(n, TARGET_US_PER_ELEMENT_STEP * n, ":", color="tab:green", label="target: 0.5 us x N")
+    for x, y, r in zip(n, step, rows):
+        ax.annotate(f"{float(r['us_per_element_step']):.2f}", (x, y), textcoords="offset points", xytext=(4, -12),
+                    fontsize=8)
+    ax.set_xlabel("elements N")
+    ax.set_ylabel("wall time per substep [us]")
+    ax.set_title("Flexible cantilever, modified Newton, KLU (labels: us per element-step)", fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    print(f"wrote {path}")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--elements", type=int, nargs="+", default=[10, 20, 50, 100, 200, 500, 1000, 2000])
+    p.add_argument("--duration", type=float, default=0.2, help="simulated time per run [s]")
+    p.add_argument("--h", type=float, default=1e-3, help="implicit substep (scene h_max) [s]")
+    p.add_argument("--communication", type=float, default=0.01, help="doStep size [s]")
+    p.add_argument("--min-time", type=float, default=1.0, help="repeat each N until this much wall time [s]")
+    p.add_argument("--phases", action="store_true", help="also time the parts of one Newton iteration")
+    p.add_argument("--build", type=pathlib.Path, default=ROOT / "build")
+    p.add_argument("--out", type=pathlib.Path, default=ROOT / "benchmarks" / "results")
+    args = p.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+
+    rows = run(compile_benchmark(args.build, "flexible_cost"), args, ["--min-time", str(args.min_time)])
+    header = ["elements", "us_per_step", "us_per_element_step", "newton_iterations_per_step",
+              "factorizations_per_step", "unknowns", "substeps", "communication_step_s", "repeats"]
+    write_csv(args.out / "flexible_cost.csv", header,
+              [[r["elements"], r["us_per_step"], r["us_per_element_step"], r["newton_per_step"],
+                r["factorizations_per_step"], r["unknowns"], r["substeps"], args.communication, r["repeats"]]
+               for r in rows])
+    for r in rows:
+        print(f"N = {r['elements']:>5}: {float(r['us_per_step']):9.1f} us/step, "
+              f"{float(r['us_per_element_step']):6.3f} us/element-step, Newton {r['newton_per_step']}/step, "
+              f"factorizations {r['factorizations_per_step']}/step")
+    plot(rows, args.out / "flexible_cost.png")
+    if args.phases:
+        phases = run(compile_benchmark(args.build, "flexible_phases"), args)
+        write_csv(args.out / "flexible_cost_phases.csv", list(phases[0].keys()), [list(r.values()) for r in phases])
+
+
+if __name__ == "__main__":
+    main()
