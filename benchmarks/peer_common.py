@@ -1,0 +1,208 @@
+"""Shared pieces of the Exudyn peer studies (peer_*.py): driving our FMU,
+Exudyn solver settings, best-of-N timing, and the CSV / log-log plot every
+study writes.
+
+Timing rule, both codes: time.perf_counter around the simulation only.
+Ours: fmi2EnterInitializationMode .. the last fmi2DoStep (instantiation,
+unzipping and packing are outside). Exudyn: mbs.SolveDynamic / SolveStatic
+(model building and mbs.Assemble are outside). The fastest of a few repeats
+counts, which filters out noise from other processes on the machine.
+"""
+import copy
+import csv
+import pathlib
+import re
+import shutil
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests" / "python"))
+from conftest import FMUS, Slave, load_scene, packed  # noqa: E402,F401
+
+OURS = "MFBD-FMU"
+EXUDYN = "Exudyn"
+
+
+def best_of(run, repeats, min_total=0.5, max_repeats=25):
+    """Calls run() at least `repeats` times, and again while the runs so far
+    took less than min_total seconds in all (so millisecond runs are repeated
+    often enough for their minimum to mean something); the result (a dict)
+    with the least wall time."""
+    results = []
+    while len(results) < repeats or (sum(r["wall_time_s"] for r in results) < min_total
+                                     and len(results) < max_repeats):
+        results.append(run())
+    return min(results, key=lambda r: r["wall_time_s"])
+
+
+class FmuRun:
+    """One FMU instance with step logging on, for timing a run and reading its
+    Newton statistics (the logStep line of the last fmi2DoStep)."""
+
+    def __init__(self, fmu, parameters=None):
+        self.slave = Slave(fmu)
+        assert self.slave.instantiate(logging_on=True), self.slave.messages()
+        self.slave.call("setDebugLogging", True, ["logStep"])
+        assert self.slave.call("setupExperiment", None, 0.0, None) == 0
+        for name, value in (parameters or {}).items():
+            assert self.slave.set(name, value) == 0, self.slave.messages()
+        self.t = 0.0
+
+    def initialize(self):
+        assert self.slave.call("enterInitializationMode") == 0, self.slave.messages()
+        assert self.slave.call("exitInitializationMode") == 0, self.slave.messages()
+
+    def step(self, h):
+        status = self.slave.step(self.t, h)
+        assert status == 0, f"fmi2DoStep status {status} at t = {self.t}:\n{self.slave.messages()}"
+        self.t += h
+
+    def get(self, *names):
+        return self.slave.get(*names)
+
+    def statistics(self):
+        """Substeps, Newton iterations, matrix factorizations and rejected
+        (halved) substeps summed over the run so far, as a dict."""
+        last = [m for _, c, m in self.slave.log if c == "logStep"][-1]
+        found = dict(steps=r"substeps (\d+)", newton_iterations=r"Newton iterations (\d+)",
+                     factorizations=r"factorizations (\d+)", rejected_steps=r"rejected (\d+)")
+        return {k: int(m.group(1)) for k, pattern in found.items() if (m := re.search(pattern, last))}
+
+    def free(self):
+        unzip = self.slave.unzip_dir
+        self.slave.free()
+        shutil.rmtree(unzip, ignore_errors=True)
+
+
+class SceneFactory:
+    """Packs scene variants into FMUs (build/mfbd-pack) in one temporary folder."""
+
+    def __init__(self):
+        self.folder = pathlib.Path(tempfile.mkdtemp(prefix="mfbd-peer-"))
+
+    def fmu(self, scene, name):
+        return packed(copy.deepcopy(scene), self.folder, name)
+
+    def close(self):
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+def exudyn_settings(static=False, end_time=1.0, h=1e-3, rho_inf=0.8, tolerance=1e-12,
+                    sensor_period=None, sparse=False, residual_criterion=False):
+    """Exudyn SimulationSettings for a timed run: no solution file, no console
+    output, one thread, generalized-alpha with spectral radius rho_inf.
+
+    Newton stops on the size of the increment (residualMode 1, tolerance
+    `tolerance`), as ours does (largest position increment). Exudyn's default
+    residual-based criterion (relative 1e-8) cannot be met on the stiff beams
+    (axial stiffness 1e7 N): Newton fails, the step is cut many times, and
+    the run is neither at the requested h nor fast. With residual_criterion
+    the residual-based stop is kept (relative 1e-10, absolute 1e-12): the
+    index-3 mass point pendulum needs it, because its multiplier increments
+    grow like 1/h^2 and an increment-based stop then ends Newton too early
+    or too late (the error at t = 10 s grows as h shrinks)."""
+    import exudyn as exu
+
+    s = exu.SimulationSettings()
+    s.solution.file.write = False
+    s.solution.sensors.active = sensor_period is not None
+    if sensor_period is not None:
+        s.solution.sensors.writePeriod = sensor_period
+    s.parallel.numberOfThreads = 1
+    s.linearSolver.solverType = exu.LinearSolverType.EigenSparse if sparse else exu.LinearSolverType.EXUdense
+    solver = s.staticSolver if static else s.timeIntegration
+    solver.verboseMode = 0
+    if residual_criterion:
+        solver.newton.residualMode = 0
+        solver.newton.relativeTolerance = 1e-10
+        solver.newton.absoluteTolerance = 1e-12
+    else:
+        solver.newton.residualMode = 1
+        solver.newton.relativeTolerance = tolerance
+        solver.newton.absoluteTolerance = tolerance
+    if not static:
+        s.timeIntegration.numberOfSteps = int(round(end_time / h))
+        s.timeIntegration.endTime = end_time
+        s.timeIntegration.generalizedAlpha.spectralRadius = rho_inf
+    return s
+
+
+def exudyn_solve(mbs, settings, static=False):
+    """Runs the solver, timed: (wall time, dict(steps=, newton_iterations=,
+    factorizations=)), factorizations being Exudyn's Jacobian computations
+    (each one factorised)."""
+    start = time.perf_counter()
+    ok = mbs.SolveStatic(settings) if static else mbs.SolveDynamic(settings)
+    wall = time.perf_counter() - start
+    assert ok, "Exudyn solver failed"
+    it = mbs.sys["staticSolver" if static else "dynamicSolver"].it
+    return wall, dict(steps=int(it.currentStepIndex), newton_iterations=int(it.newtonStepsCount),
+                      factorizations=int(it.newtonJacobiCount))
+
+
+def write_csv(path, rows):
+    """rows: list of dicts; columns code, h_or_elements, wall_time_s, error
+    first, then every other key in order of first appearance."""
+    columns = ["code", "h_or_elements", "wall_time_s", "error"]
+    for r in rows:
+        columns += [k for k in r if k not in columns]
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def series_label(row):
+    return f"{row['code']}: {row['model']}" if row.get("model") else row["code"]
+
+
+def plot_precision_work(ax, rows, error_key="error", annotate="h_or_elements", floor=1e-16):
+    """Log-log error against wall time, one line per code and model, each
+    point labelled with its step size or element count."""
+    palette = {OURS: [("C0", "o"), ("C9", "v")], EXUDYN: [("C3", "s"), ("C2", "^"), ("C1", "D")]}
+    labels = list(dict.fromkeys(series_label(r) for r in rows))
+    for label in labels:
+        sel = [r for r in rows if series_label(r) == label and r.get(error_key) not in (None, "")]
+        if not sel:
+            continue
+        x = np.array([float(r["wall_time_s"]) for r in sel])
+        y = np.maximum(np.array([float(r[error_key]) for r in sel]), floor)
+        code = sel[0]["code"]
+        same_code = [lab for lab in labels if lab.startswith(code)]
+        color, marker = palette[code][same_code.index(label) % len(palette[code])]
+        style = dict(color=color, marker=marker)
+        ax.loglog(x, y, "-", label=label, **style)
+        for xi, yi, r in zip(x, y, sel):
+            ax.annotate(_short(r[annotate]), (xi, yi), textcoords="offset points", xytext=(4, 3), fontsize=6,
+                        color=style["color"])
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+
+
+def _short(value):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        return str(value)
+    return f"{int(v)}" if v >= 1 and v == int(v) else f"{v:.0e}"
+
+
+def save_figure(fig, path):
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+def cheapest_at(rows, level, error_key="error"):
+    """The cheapest run (least wall time) of rows whose error is <= level, or None."""
+    ok = [r for r in rows if r.get(error_key) not in (None, "") and float(r[error_key]) <= level]
+    return min(ok, key=lambda r: float(r["wall_time_s"])) if ok else None

@@ -1,0 +1,137 @@
+#!/usr/bin/env python3
+"""R1 pendulum, our FMU against Exudyn: error of the bob position at t = 10 s
+against the published value (shared/benchmarks R1) over substeps
+h = 1e-2 ... 5e-5, and the wall time of the 10 s run.
+
+Both codes use Lie-group / Arnold-Bruls generalized-alpha with rho_inf = 0.8
+(the pendulum scene's default). Newton stops on the increment (ours: largest
+position increment 1e-12; Exudyn KinematicTree: increment norm 1e-12) or, for
+the Exudyn mass point, on the residual (see peer_common.exudyn_settings).
+
+Ours: build/fmus/pendulum.fmu (a point mass on a revolute joint, one joint
+coordinate), communication step 0.1 s.
+
+Exudyn, two models of the same physics:
+  * KinematicTree: one RevoluteZ link of mass 1 kg with its centre of mass
+    1 m from the axis and zero inertia about it -- minimal (joint)
+    coordinates, the same formulation as ours;
+  * MassPoint2D + ConnectorDistance: a 1 kg point in the plane held at 1 m
+    from the ground point by an index-3 distance constraint (redundant
+    coordinates and a Lagrange multiplier).
+Writes r1_pendulum_precision.csv and .png.
+"""
+import argparse
+import pathlib
+import time
+
+import numpy as np
+
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, plot_precision_work, \
+    save_figure, write_csv
+
+G, L, MASS, STOP = 9.81, 1.0, 1.0, 10.0
+R1_AT_10S = (0.275087462576, -0.961419205099)
+STEPS = [1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5]
+RHO_INF = 0.8
+
+
+def position_error(x, y):
+    return float(np.hypot(x - R1_AT_10S[0], y - R1_AT_10S[1]))
+
+
+def ours(fmu, h, communication=0.1):
+    run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF})
+    try:
+        start = time.perf_counter()
+        run.initialize()
+        for _ in range(int(round(STOP / communication))):
+            run.step(communication)
+        wall = time.perf_counter() - start
+        x, y = run.get("bob.position.x", "bob.position.y")
+        statistics = run.statistics()
+    finally:
+        run.free()
+    return dict(wall_time_s=wall, error=position_error(x, y), **statistics)
+
+
+def exudyn_kinematic_tree(h):
+    import exudyn as exu
+    from exudyn.itemInterface import NodeGenericODE2, ObjectKinematicTree
+
+    mbs = exu.SystemContainer().AddSystem()
+    node = mbs.AddNode(NodeGenericODE2(numberOfODE2Coordinates=1, referenceCoordinates=[0.0],
+                                       initialCoordinates=[0.0], initialCoordinates_t=[0.0]))
+    mbs.AddObject(ObjectKinematicTree(
+        nodeNumber=node, jointTypes=[exu.JointType.RevoluteZ], linkParents=[-1],
+        jointTransformations=exu.Matrix3DList([np.eye(3)]), jointOffsets=exu.Vector3DList([[0.0, 0.0, 0.0]]),
+        linkInertiasCOM=exu.Matrix3DList([np.zeros((3, 3))]), linkCOMs=exu.Vector3DList([[L, 0.0, 0.0]]),
+        linkMasses=[MASS], gravity=[0.0, -G, 0.0]))
+    mbs.Assemble()
+    wall, statistics = exudyn_solve(mbs, exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF))
+    angle = mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates)
+    angle = float(np.ravel(angle)[0])
+    return dict(wall_time_s=wall, error=position_error(L * np.cos(angle), L * np.sin(angle)),
+                **statistics)
+
+
+def exudyn_mass_point(h):
+    import exudyn as exu
+    from exudyn.itemInterface import (LoadForceVector, MarkerBodyPosition, MarkerNodePosition, NodePoint2D,
+                                      ObjectConnectorDistance, ObjectGround, ObjectMassPoint2D)
+
+    mbs = exu.SystemContainer().AddSystem()
+    ground = mbs.AddObject(ObjectGround())
+    node = mbs.AddNode(NodePoint2D(referenceCoordinates=[L, 0.0]))
+    mbs.AddObject(ObjectMassPoint2D(mass=MASS, nodeNumber=node))
+    pivot = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[0.0, 0.0, 0.0]))
+    bob = mbs.AddMarker(MarkerNodePosition(nodeNumber=node))
+    mbs.AddObject(ObjectConnectorDistance(markerNumbers=[pivot, bob], distance=L))
+    mbs.AddLoad(LoadForceVector(markerNumber=bob, loadVector=[0.0, -MASS * G, 0.0]))
+    mbs.Assemble()
+    settings = exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF, residual_criterion=True)
+    wall, statistics = exudyn_solve(mbs, settings)
+    p = mbs.GetNodeOutput(node, exu.OutputVariableType.Position)
+    return dict(wall_time_s=wall, error=position_error(p[0], p[1]), **statistics)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
+    parser.add_argument("--fmu", type=pathlib.Path, default=FMUS / "pendulum.fmu")
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+
+    codes = [(OURS, "revolute joint, joint coordinate", lambda h: ours(args.fmu, h)),
+             (EXUDYN, "KinematicTree RevoluteZ (joint coordinate)", exudyn_kinematic_tree),
+             (EXUDYN, "MassPoint2D + ConnectorDistance (index 3)", exudyn_mass_point)]
+    rows = []
+    for code, model, run in codes:
+        for h in STEPS:
+            r = best_of(lambda: run(h), args.repeats)
+            rows.append(dict(code=code, h_or_elements=h, wall_time_s=r["wall_time_s"], error=r["error"], model=model,
+                             rho_inf=RHO_INF, steps=r["steps"], newton_iterations=r["newton_iterations"],
+                             factorizations=r.get("factorizations", ""),
+                             rejected_steps=r.get("rejected_steps", "")))
+            print(f"R1 {code:9s} {model:45s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:9.2f} ms  "
+                  f"error at 10 s {r['error']:9.2e} m  Newton it/step {r['newton_iterations'] / r['steps']:4.2f}",
+                  flush=True)
+    csv_path = args.out / "r1_pendulum_precision.csv"
+    write_csv(csv_path, rows)
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    plot_precision_work(ax, rows)
+    ax.set_xlabel("wall time for 10 s simulated [s]")
+    ax.set_ylabel("bob position error at t = 10 s [m]")
+    ax.set_title(f"R1 pendulum: error against run time (generalized-alpha, rho_inf = {RHO_INF}; labels: h)",
+                 fontsize=9)
+    png = args.out / "r1_pendulum_precision.png"
+    save_figure(fig, png)
+    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
+
+
+if __name__ == "__main__":
+    main()

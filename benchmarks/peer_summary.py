@@ -1,0 +1,82 @@
+#!/usr/bin/env python3
+"""Wall time at matched error, from the CSVs of the peer studies
+(peer_r1_pendulum.py, peer_f1_end_moment.py, peer_f3_vibration.py,
+peer_f4_spin_up.py): for each problem, metric and error level, the cheapest
+run of each code and model that reached the level (no interpolation), and
+the ratio of our wall time to the fastest Exudyn model's. Writes
+peer_summary.csv and prints the same as a Markdown table.
+"""
+import argparse
+import csv
+import pathlib
+
+from peer_common import EXUDYN, OURS, cheapest_at, read_csv, series_label
+
+# problem -> (csv, [(metric column, description, error levels)])
+STUDIES = {
+    "R1 pendulum": ("r1_pendulum_precision.csv", [("error", "bob position at 10 s [m]", [1e-3, 1e-4, 1e-5, 1e-6, 1e-7])]),
+    "F1 end moment": ("f1_end_moment_precision.csv", [("error", "tip position [m]", [1e-3, 1e-4, 1e-5])]),
+    "F3 vibration": ("f3_vibration_precision.csv", [("error", "f1, relative", [1e-2, 2e-3, 5e-4])]),
+    "F4 spin-up": ("f4_spin_up_precision.csv", [("error", "tip deflection at 7 s [m]", [1e-2, 1e-3, 1e-4]),
+                                                ("elongation_error", "steady elongation [m]", [1e-5, 1e-6, 1e-7])]),
+}
+
+
+def setting(row):
+    h = row.get("h_s")
+    return f"n={row['h_or_elements']}, h={float(h):.3g}" if h else f"{float(row['h_or_elements']):g}"
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
+    args = parser.parse_args()
+    summary = []  # one row per problem, metric, error level, code and model
+    for problem, (name, metrics) in STUDIES.items():
+        path = args.out / name
+        if not path.exists():
+            print(f"(no {name}: skipped)")
+            continue
+        rows = read_csv(path)
+        models = list(dict.fromkeys(series_label(r) for r in rows))
+        for metric, description, levels in metrics:
+            for level in levels:
+                entries = []
+                for label in models:
+                    best = cheapest_at([r for r in rows if series_label(r) == label], level, metric)
+                    entries.append(dict(problem=problem, metric=description, error_level=level,
+                                        code=label.split(": ")[0], model=label.split(": ", 1)[-1],
+                                        wall_time_s=float(best["wall_time_s"]) if best else "",
+                                        setting=setting(best) if best else "not reached"))
+                ours = [e["wall_time_s"] for e in entries if e["code"] == OURS and e["wall_time_s"] != ""]
+                exudyn = [e["wall_time_s"] for e in entries if e["code"] == EXUDYN and e["wall_time_s"] != ""]
+                for e in entries:
+                    e["ours_over_fastest_exudyn"] = ours[0] / min(exudyn) if ours and exudyn else ""
+                summary += entries
+    with open(args.out / "peer_summary.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(summary[0]))
+        w.writeheader()
+        for e in summary:
+            w.writerow({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in e.items()})
+    print_markdown(summary)
+    print(f"wrote {(args.out / 'peer_summary.csv').resolve()}")
+
+
+def print_markdown(summary):
+    print("| problem, error | level | MFBD-FMU | Exudyn | ours / fastest Exudyn |")
+    print("|---|---|---|---|---|")
+    groups = {}
+    for e in summary:
+        groups.setdefault((e["problem"], e["metric"], e["error_level"]), []).append(e)
+    for (problem, metric, level), entries in groups.items():
+        def cell(e):
+            time = f"{e['wall_time_s'] * 1e3:.3g} ms" if e["wall_time_s"] != "" else "not reached"
+            return f"{time} ({e['setting']})" if e["wall_time_s"] != "" else time
+        ours = "; ".join(cell(e) for e in entries if e["code"] == OURS)
+        exudyn = "; ".join(f"{e['model']}: {cell(e)}" for e in entries if e["code"] == EXUDYN)
+        ratio = entries[0]["ours_over_fastest_exudyn"]
+        print(f"| {problem}, {metric} | {level:g} | {ours} | {exudyn} | {f'{ratio:.2g}' if ratio != '' else '-'} |")
+
+
+if __name__ == "__main__":
+    main()
