@@ -107,8 +107,8 @@ Model assemble(const Scene& scene) {
     if (scene.joints[i].cut) cutJoints.push_back(i);
     else jointOrder[bodyIndex.at(scene.joints[i].child)] = i;
   }
-  for (int sceneIndex : jointOrder) {
-    const JointSpec& spec = scene.joints[sceneIndex];
+  // A joint's markers: its design frame fixed in the parent and in the child.
+  auto jointOf = [&](const JointSpec& spec) {
     Joint j;
     j.name = spec.name;
     j.type = spec.type;
@@ -120,6 +120,12 @@ Model assemble(const Scene& scene) {
     const int parent = indexOf(spec.parent), child = indexOf(spec.child);
     j.parentMarker = markerOn(parent, frameOf(parent), jointFrame);
     j.childMarker = markerOn(child, frameOf(child), jointFrame);
+    return j;
+  };
+  for (int sceneIndex : jointOrder) {
+    const JointSpec& spec = scene.joints[sceneIndex];
+    Joint j = jointOf(spec);
+    const int parent = j.parentMarker.body, child = j.childMarker.body;
     layOutCoordinates(model, j, spec);
     if (spec.driven) {
       j.driven = true;
@@ -134,15 +140,7 @@ Model assemble(const Scene& scene) {
   // Cut joints close loops: constraint rows with Lagrange multipliers.
   for (int sceneIndex : cutJoints) {
     const JointSpec& spec = scene.joints[sceneIndex];
-    Joint j;
-    j.name = spec.name;
-    j.type = spec.type;
-    j.dofs = int(jointDofs(spec.type));
-    j.cut = true;
-    const WorldFrame jointFrame{spec.position, frameFromZAxis(spec.axis)};
-    const int parent = indexOf(spec.parent), child = indexOf(spec.child);
-    j.parentMarker = markerOn(parent, frameOf(parent), jointFrame);
-    j.childMarker = markerOn(child, frameOf(child), jointFrame);
+    Joint j = jointOf(spec);
     j.constraintOffset = model.constraintCount;
     model.constraintCount += constraintCount(spec.type);
     model.joints.push_back(j);
