@@ -2,6 +2,7 @@
 thin FMI 2.0 CS driver over fmpy that returns statuses and captures the log."""
 import ctypes
 import json
+import os
 import pathlib
 import shutil
 import subprocess
@@ -13,7 +14,8 @@ from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFr
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-BUILD = ROOT / "build"
+# MFBD_BUILD: another build folder (parallel work on one checkout).
+BUILD = pathlib.Path(os.environ.get("MFBD_BUILD", ROOT / "build"))
 FMUS = BUILD / "fmus"
 PACKER = BUILD / "mfbd-pack"
 EXAMPLES = ROOT / "examples"
