@@ -80,7 +80,7 @@ std::vector<Variable> variableTable(const Scene& scene) {
         scene.solver.rhoInf);
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
-    if (jointDofs(jt.type) == 0 || jt.cut) continue;
+    if (jointDofs(jt.type) == 0 || jt.cut || jt.isVirtual) continue;
     const bool rotational = jt.type == JointType::Revolute;
     t.add(jt.name + ".damping", P, Variability::Tunable, rotational ? "N.m.s/rad" : "",
           "viscous damping per joint DOF", {QK::JointDamping, j}, jt.damping);
@@ -150,7 +150,7 @@ std::vector<Variable> variableTable(const Scene& scene) {
   // Outputs: joints, then bodies, then flexible nodes and elements, as the scene selects.
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
-    if (!selected(scene.outputs.allJoints, scene.outputs.joints, jt.name)) continue;
+    if (jt.isVirtual || !selected(scene.outputs.allJoints, scene.outputs.joints, jt.name)) continue;
     const auto names = jt.cut ? std::vector<std::string>() : jointCoordinateNames(jt.type);
     for (int d = 0; d < int(names.size()); ++d) {
       const bool angular = isAngle(names[d]);
@@ -170,9 +170,22 @@ std::vector<Variable> variableTable(const Scene& scene) {
                "torque of the parent on the child about the joint origin, child marker frame",
                {QK::JointReactionTorque, j, c});
   }
+  // Flexible body joints with the joint or force element that made them.
+  for (int k = 0; k < int(model.flexibleBodyJoints.size()); ++k) {
+    const std::string& name = model.flexibleBodyJoints[k].name;
+    for (int c = 0; c < 3; ++c)
+      t.output(name + ".force." + kAxes[c], "N", "force of the node on the virtual body, virtual body frame",
+               {QK::FlexibleBodyJointForce, k, c});
+    for (int c = 0; c < 3; ++c)
+      t.output(name + ".torque." + kAxes[c], "N.m",
+               "torque of the node on the virtual body about its origin, virtual body frame",
+               {QK::FlexibleBodyJointTorque, k, c});
+    t.output(name + ".violation", "", "largest constraint violation of the weld (m, rad)",
+             {QK::FlexibleBodyJointViolation, k});
+  }
   for (int b = 0; b < int(scene.bodies.size()); ++b) {
     const std::string& name = scene.bodies[b].name;
-    if (!selected(scene.outputs.allBodies, scene.outputs.bodies, name)) continue;
+    if (scene.bodies[b].isVirtual || !selected(scene.outputs.allBodies, scene.outputs.bodies, name)) continue;
     for (int c = 0; c < 3; ++c)
       t.output(name + ".position." + kAxes[c], "m", "body frame origin, world", {QK::BodyPosition, b, c});
     for (int c = 0; c < 4; ++c)
@@ -212,6 +225,12 @@ std::vector<Variable> variableTable(const Scene& scene) {
       for (int c = 0; c < 3; ++c)
         t.output(name + ".angular_velocity." + kAxes[c], "rad/s", "node angular velocity, world",
                  {QK::NodeAngularVelocity, n, c});
+    }
+    if (spec.outputEnergy) {
+      t.output(spec.name + ".kinetic_energy", "J", "kinetic energy of the nodal inertia", {QK::FlexibleEnergy, int(b), 0});
+      t.output(spec.name + ".strain_energy", "J", "elastic strain energy of the elements", {QK::FlexibleEnergy, int(b), 1});
+      t.output(spec.name + ".potential_energy", "J", "potential energy of gravity (zero at the world origin)",
+               {QK::FlexibleEnergy, int(b), 2});
     }
     for (int e : spec.outputElements) {
       const std::string name = spec.name + ".element" + std::to_string(e);

@@ -1,6 +1,7 @@
 #include "simulation.hpp"
 
 #include "coupling/joint_constraint.hpp"
+#include "flex/flexible_energy.hpp"
 #include "integrator/generalized_alpha.hpp"
 #include "integrator/static_equilibrium.hpp"
 #include "rigid/force_elements.hpp"
@@ -49,6 +50,8 @@ std::string Simulation::constraintOwner(int row) const {
     if (j.constraintOffset >= 0 && row >= j.constraintOffset &&
         row < j.constraintOffset + (j.driven ? 1 : constraintCount(j.type)))
       return std::string(j.driven ? "drive of joint '" : "cut joint '") + j.name + "'";
+  for (const FlexibleBodyJoint& w : system_.model().flexibleBodyJoints)
+    if (row >= w.constraintOffset && row < w.constraintOffset + 6) return "flexible body joint '" + w.name + "'";
   return "constraint row " + std::to_string(row);
 }
 
@@ -209,6 +212,12 @@ double Simulation::read(const Quantity& q) {
     const SpringState s = springState(model.forces[q.index], system_.forceInputs(), data);
     return q.component == 0 ? s.length : q.component == 1 ? s.rate : s.force;
   }
+  if (q.kind == QuantityKind::FlexibleBodyJointViolation) return system_.flexibleBodyJointViolation(q.index);
+  if (q.kind == QuantityKind::FlexibleBodyJointForce || q.kind == QuantityKind::FlexibleBodyJointTorque) {
+    Vec3 force, torque;
+    system_.flexibleBodyJointReaction(q.index, outputLambda_, force, torque);
+    return q.kind == QuantityKind::FlexibleBodyJointForce ? force[q.component] : torque[q.component];
+  }
   if (q.kind == QuantityKind::JointDriveForce)
     return -outputLambda_[model.joints[jointIndex_[q.index]].constraintOffset];
   if (q.kind == QuantityKind::JointCoordinate || q.kind == QuantityKind::JointRate ||
@@ -244,6 +253,11 @@ double Simulation::read(const Quantity& q) {
 
 double Simulation::readFlexible(const Quantity& q) {
   const FlexibleMesh& mesh = system_.model().flexible;
+  if (q.kind == QuantityKind::FlexibleEnergy) {
+    const FlexibleEnergy e =
+        flexibleBodyEnergy(mesh, mesh.bodies[q.index], system_.nodes(), system_.model().gravity);
+    return q.component == 0 ? e.kinetic : q.component == 1 ? e.strain : e.gravity;
+  }
   if (q.kind == QuantityKind::ElementSectionForce) {
     const FlexElement& e = mesh.elements[q.index];
     const NodeState &a = system_.nodes()[e.node1], &b = system_.nodes()[e.node2];

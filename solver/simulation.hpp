@@ -22,6 +22,9 @@ enum class QuantityKind {
   JointReactionForce,   // component 0..2, child marker frame
   JointReactionTorque,  // about the child marker origin
   JointDriveForce,      // generalized force of a drive along its coordinate
+  FlexibleBodyJointForce,      // index: flexible body joint; node on virtual body, virtual body frame
+  FlexibleBodyJointTorque,     // about the virtual body's origin
+  FlexibleBodyJointViolation,  // largest |Phi| of its six rows (m, rad)
   ForceInput,           // index: offset into the force-element inputs             (input)
   SpringLength,         // index: force element; length, rate (component 1), tension (component 2)
   BodyPosition,         // user body frame origin, world
@@ -33,6 +36,7 @@ enum class QuantityKind {
   NodeVelocity,
   NodeAngularVelocity,  // world
   ElementSectionForce,  // index: mesh element; component 0..5 end 1 (N, Vy, Vz, T, My, Mz), 6..11 end 2
+  FlexibleEnergy,       // index: flexible body; component 0 kinetic, 1 strain, 2 gravity potential
   FlexibleInput,        // index: offset into the flexible inputs (load components, drive rates)
   FlexibleDamping,      // index: flexible body (scene order)                       (tunable)
 };

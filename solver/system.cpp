@@ -84,6 +84,16 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
       data_.appliedTorque[parent] += onParent.tail<3>();
     }
   }
+  // Flexible body joints: rows, and their forces on the virtual bodies (the
+  // node side is added in residual(); nodes_ is current).
+  for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
+    const ConstraintEvaluation c = evaluateJointConstraint(w.weld, poseOfNode(nodes_[w.node]), poseOf(data_, w.virtualBody));
+    phi.segment<6>(w.constraintOffset) = c.phi;
+    if (lambda.size() == 0) continue;
+    const Vec6 onBody = -c.jacobianChild.transpose() * lambda.segment<6>(w.constraintOffset);
+    data_.appliedForce[w.virtualBody] += onBody.head<3>();
+    data_.appliedTorque[w.virtualBody] += onBody.tail<3>();
+  }
   jointForces(q, v, tau_);
   backwardNewtonEuler(model_, data_, tau_, r);
   // Drives: coordinate - drive(t) = 0; the multiplier acts along the DOF.
@@ -98,15 +108,29 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
                       const VectorXd& lambda, VectorXd& r, VectorXd& phi) {
   r.setZero(model_.velocityCount);
   phi.resize(0);
+  // Nodes first: the flexible body joints of the rigid part read them.
+  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
   if (!model_.bodies.empty()) {
     rigidResidual(t, q, v, vdot, lambda, rigid_, phi);
     r.head(model_.rigidVelocityCount) = rigid_;
   }
   if (!model_.flexible.empty()) {
-    flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
     const bool inertia = model_.analysis == Analysis::Dynamic;
     if (!flexibleResidual(model_.flexible, nodes_, model_.gravity, flexibleInputs_, t, inertia, r))
       r.setConstant(std::numeric_limits<double>::quiet_NaN());  // a failed iterate: the step is retried smaller
+    if (lambda.size() > 0) weldForcesOnNodes(lambda, r);
+  }
+}
+
+// Node rows of the flexible body joints' forces: W^T Phi_node^T lambda.
+void System::weldForcesOnNodes(const VectorXd& lambda, VectorXd& r) const {
+  for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
+    const NodeState& n = nodes_[w.node];
+    const ConstraintEvaluation c = evaluateJointConstraint(w.weld, poseOfNode(n), poseOf(data_, w.virtualBody));
+    const Vec6 g = nodeVariation(n).transpose() * (c.jacobianParent.transpose() * lambda.segment<6>(w.constraintOffset));
+    const FlexNode& node = model_.flexible.nodes[w.node];
+    for (int k = 0; k < 6; ++k)
+      if (node.dof[k] >= 0) r[node.dof[k]] += node.P.col(k).dot(g);
   }
 }
 
@@ -134,6 +158,13 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
     for (int col = 0; col < n; ++col)
       for (int i = 0; i < rows.rows(); ++i) constraintJacobian.emplace_back(j.constraintOffset + i, col, rows(i, col));
   }
+  for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
+    const ConstraintEvaluation c =
+        evaluateJointConstraint(w.weld, poseOfNode(nodes_[w.node]), poseOf(data_, w.virtualBody));
+    const Eigen::MatrixXd rows = c.jacobianChild * B.middleRows<6>(6 * w.virtualBody);
+    for (int col = 0; col < n; ++col)
+      for (int i = 0; i < 6; ++i) constraintJacobian.emplace_back(w.constraintOffset + i, col, rows(i, col));
+  }
   if (cC != 0.0 || cK != 0.0) {
     VectorXd r0, r1, phi;
     rigidResidual(t, q, v, vdot, lambda, r0, phi);
@@ -153,6 +184,7 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
       rigidResidual(t, qp, vp, vdot, lambda, r1, phi);
       S.col(i) += (cK != 0.0 ? cK : cC) * (r1 - r0) / eps;
     }
+    forwardKinematics(model_, data_, q, v, vdot);  // the workspace of q again, not of the last perturbation
   }
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) iteration.emplace_back(i, j, S(i, j));
@@ -161,12 +193,52 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
 void System::tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                      const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                      Triplets& constraintJacobian) {
+  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
   if (!model_.bodies.empty()) rigidTangent(t, q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
   if (!model_.flexible.empty()) {
-    flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
     const bool inertia = model_.analysis == Analysis::Dynamic;
     flexibleTangent(model_.flexible, nodes_, flexibleInputs_, t, inertia ? cM : 0.0, inertia ? cC : 0.0, cK,
                     iteration);
+    weldTangent(lambda, cK, iteration, constraintJacobian);
+  }
+}
+
+// The flexible body joints' blocks that the rigid finite differences do not
+// see (they hold the nodes fixed): node columns of the rows, Phi_node W P;
+// and the geometric stiffness K = d(Phi_z^T lambda)/dz between node and
+// virtual body, mapped by W P (node) and B (virtual body), plus the turning
+// of the node frame in W^T: d(A^T N)/dtheta = skew(A^T N).
+void System::weldTangent(const VectorXd& lambda, double cK, Triplets& iteration, Triplets& constraintJacobian) const {
+  const int nr = model_.rigidVelocityCount;
+  const Eigen::MatrixXd& B = data_.velocityTransformation;  // current: rigidTangent computed it
+  for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
+    const NodeState& n = nodes_[w.node];
+    const FlexNode& node = model_.flexible.nodes[w.node];
+    const BodyPose nodePose = poseOfNode(n), bodyPose = poseOf(data_, w.virtualBody);
+    const ConstraintEvaluation c = evaluateJointConstraint(w.weld, nodePose, bodyPose);
+    const Mat6 WP = nodeVariation(n) * node.P;
+    const Mat6 rows = c.jacobianParent * WP;
+    for (int i = 0; i < 6; ++i)
+      for (int k = 0; k < 6; ++k)
+        if (node.dof[k] >= 0) constraintJacobian.emplace_back(w.constraintOffset + i, node.dof[k], rows(i, k));
+    if (cK == 0.0 || lambda.size() == 0) continue;
+    const auto l = lambda.segment<6>(w.constraintOffset);
+    const GeometricStiffness K = constraintGeometricStiffness(w.weld, nodePose, bodyPose, l);
+    Mat6 nodeNode = WP.transpose() * K.topLeftCorner<6, 6>() * WP;
+    const Vec3 moment = n.pose.A.transpose() * (c.jacobianParent.transpose() * l).tail<3>();
+    nodeNode += node.P.transpose().rightCols<3>() * skew(moment) * node.P.bottomRows<3>();
+    const Eigen::Matrix<double, 6, Eigen::Dynamic> Bv = B.middleRows<6>(6 * w.virtualBody);
+    const Eigen::Matrix<double, 6, Eigen::Dynamic> nodeRigid = WP.transpose() * K.topRightCorner<6, 6>() * Bv;
+    const Eigen::Matrix<double, Eigen::Dynamic, 6> rigidNode = Bv.transpose() * K.bottomLeftCorner<6, 6>() * WP;
+    for (int k = 0; k < 6; ++k) {
+      if (node.dof[k] < 0) continue;
+      for (int l2 = 0; l2 < 6; ++l2)
+        if (node.dof[l2] >= 0) iteration.emplace_back(node.dof[k], node.dof[l2], cK * nodeNode(k, l2));
+      for (int col = 0; col < nr; ++col) {
+        iteration.emplace_back(node.dof[k], col, cK * nodeRigid(k, col));
+        iteration.emplace_back(col, node.dof[k], cK * rigidNode(col, k));
+      }
+    }
   }
 }
 
@@ -191,6 +263,23 @@ VectorXd System::constraintAccelerationTerm(double t, const Configuration& q, co
         mfbd::constraintAccelerationTerm(jc, poseOf(data_, parent), twistOf(data_, parent), poseOf(data_, child),
                                     twistOf(data_, child));
   }
+  if (!model_.flexibleBodyJoints.empty()) {
+    // Node accelerations at vdot = 0: those of driven supports.
+    flexibleNodeStates(model_.flexible, q, v, VectorXd::Zero(model_.velocityCount), t, drives_, flexibleInputs_,
+                       nodes_);
+    for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
+      const NodeState& n = nodes_[w.node];
+      const BodyPose nodePose = poseOfNode(n), bodyPose = poseOf(data_, w.virtualBody);
+      const ConstraintEvaluation c = evaluateJointConstraint(w.weld, nodePose, bodyPose);
+      const BodyKinematics& b = data_.body[w.virtualBody];
+      Vec6 nodeBias, bodyBias;
+      nodeBias << n.acceleration.a, n.pose.A * n.acceleration.omegaDot;
+      bodyBias << b.acceleration, b.angularAcceleration;
+      gamma.segment<6>(w.constraintOffset) =
+          c.jacobianParent * nodeBias + c.jacobianChild * bodyBias +
+          mfbd::constraintAccelerationTerm(w.weld, nodePose, twistOfNode(n), bodyPose, twistOf(data_, w.virtualBody));
+    }
+  }
   return gamma;
 }
 
@@ -201,6 +290,21 @@ void System::cutJointReaction(int joint, const VectorXd& lambda, Vec3& force, Ve
                                              lambda.segment(j.constraintOffset, mfbd::constraintCount(j.type)));
   force = r.force;
   torque = r.torque;
+}
+
+void System::flexibleBodyJointReaction(int k, const VectorXd& lambda, Vec3& force, Vec3& torque) const {
+  const FlexibleBodyJoint& w = model_.flexibleBodyJoints[k];
+  const JointReaction r = constraintReaction(w.weld, poseOfNode(nodes_[w.node]), poseOf(data_, w.virtualBody),
+                                             lambda.segment<6>(w.constraintOffset));
+  force = r.force;
+  torque = r.torque;
+}
+
+double System::flexibleBodyJointViolation(int k) const {
+  const FlexibleBodyJoint& w = model_.flexibleBodyJoints[k];
+  return evaluateJointConstraint(w.weld, poseOfNode(nodes_[w.node]), poseOf(data_, w.virtualBody))
+      .phi.cwiseAbs()
+      .maxCoeff();
 }
 
 void System::evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,

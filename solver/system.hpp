@@ -44,6 +44,11 @@ class System : public Dynamics {
   // Force and torque a cut joint passes to its child (child marker frame,
   // about its origin), from the multipliers (after evaluate()).
   void cutJointReaction(int joint, const VectorXd& lambda, Vec3& force, Vec3& torque) const;
+  // Force and torque flexible body joint k passes from the node to its
+  // virtual body (virtual body frame, about its origin), and the largest
+  // violation of its rows (m, rad), after evaluate().
+  void flexibleBodyJointReaction(int k, const VectorXd& lambda, Vec3& force, Vec3& torque) const;
+  double flexibleBodyJointViolation(int k) const;
 
   // Kinematics, joint reactions and node states of a state into data() and
   // nodes() (for outputs).
@@ -55,6 +60,8 @@ class System : public Dynamics {
   void rigidTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                     double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
   void jointForces(const Configuration& q, const VectorXd& v, VectorXd& tau) const;
+  void weldForcesOnNodes(const VectorXd& lambda, VectorXd& r) const;
+  void weldTangent(const VectorXd& lambda, double cK, Triplets& iteration, Triplets& constraintJacobian) const;
 
   Model model_;
   Data data_;

@@ -89,6 +89,7 @@ Model assemble(const Scene& scene) {
     const BodySpec& spec = scene.bodies[order[k]];
     Body b;
     b.name = spec.name;
+    b.isVirtual = spec.isVirtual;
     b.mass = spec.mass;
     b.inertia = spec.inertia;
     b.centerOfMass = spec.centerOfMass;
@@ -185,6 +186,21 @@ Model assemble(const Scene& scene) {
   model.analysis = scene.analysis;
   assembleFlexibleBodies(scene, model.flexible, model.blocks, model.initialConfiguration, model.initialVelocity,
                          model.velocityCount);
+  // Flexible body joints: the virtual body's design frame, fixed in the node's.
+  for (const FlexibleBodyJointSpec& spec : scene.flexibleBodyJoints) {
+    FlexibleBodyJoint w;
+    w.name = spec.name;
+    w.virtualBody = bodyIndex.at(spec.virtualBody);
+    w.node = model.flexible.bodies[spec.flexibleBody].firstNode + spec.node;
+    const NodePose& node = model.flexible.nodes[w.node].reference;
+    const WorldFrame& body = design[w.virtualBody];
+    w.weld.type = JointType::Fixed;
+    w.weld.parentMarker = {node.A.transpose() * (body.origin - node.r), node.A.transpose() * body.orientation};
+    w.weld.childMarker = {Vec3::Zero(), Mat3::Identity()};
+    w.constraintOffset = model.constraintCount;
+    model.constraintCount += 6;
+    model.flexibleBodyJoints.push_back(w);
+  }
   return model;
 }
 

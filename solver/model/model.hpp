@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "coupling/flexible_body_joint.hpp"
 #include "flex/flexible_mesh.hpp"
 #include "model/configuration.hpp"
 #include "scene/scene.hpp"
@@ -26,6 +27,7 @@ struct Marker {
 // to the user's body frame, so the body mass matrix is diag(m I, J).
 struct Body {
   std::string name;
+  bool isVirtual = false;              // massless, welded to a flexible node
   double mass = 0.0;
   Mat3 inertia = Mat3::Zero();         // about the centre of mass, body axes
   Vec3 centerOfMass = Vec3::Zero();    // user body frame origin -> centre of mass, body axes
@@ -72,13 +74,14 @@ struct Model {
   SolverOptions solver;
   FlexibleMesh flexible;        // nodes, beam elements, supports, loads, drives
   std::vector<ForceElement> forces;  // between markers on bodies
+  std::vector<FlexibleBodyJoint> flexibleBodyJoints;  // virtual body <-> flexible node welds
   int forceInputCount = 0;
   Analysis analysis = Analysis::Dynamic;
   std::vector<CoordinateBlock> blocks;  // the configuration manifold
   int rigidVelocityCount = 0;   // joint rates come first in v, then flexible nodes
   int velocityCount = 0;
   int jointInputCount = 0;
-  int constraintCount = 0;      // rows of Phi: cut joints
+  int constraintCount = 0;      // rows of Phi: drives, cut joints, flexible body joints
   Configuration initialConfiguration;
   VectorXd initialVelocity;
 };

@@ -148,4 +148,27 @@ class Field {
   const std::map<std::string, double>& params_;
 };
 
+// A joint's or force element's end: a body name ("ground" allowed), or a
+// flexible node {"flexible": name, "node": i} or {"flexible": name, "at": s}
+// (then `body` stays empty until the assembly makes its virtual body).
+inline void parseEnd(const Field& f, std::string& body, std::optional<NodeReference>& node) {
+  if (!f.raw().is_object()) {
+    body = f.identifier();
+    return;
+  }
+  f.expectObject({"flexible", "node", "at"}, {"flexible"});
+  if (f.has("node") == f.has("at")) f.fail("expected exactly one of \"node\" (an index) or \"at\" (a distance)");
+  NodeReference r;
+  r.flexibleBody = f.at("flexible").identifier();
+  r.path = f.path();
+  if (f.has("node")) {
+    r.node = f.at("node").integer();
+    if (r.node < 0) f.at("node").fail("expected a node index >= 0");
+  } else {
+    r.at = f.at("at").nonNegative();
+  }
+  body.clear();
+  node = r;
+}
+
 }  // namespace mfbd

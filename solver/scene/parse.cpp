@@ -144,13 +144,17 @@ JointType parseJointType(const Field& f) {
 JointSpec parseJoint(const Field& f) {
   f.expectObject({"name", "type", "parent", "child", "position", "axis", "cut", "initial", "damping", "actuated",
                   "drive"},
-                 {"name", "type", "parent", "child", "position"});
+                 {"name", "type", "parent", "child"});
   JointSpec jt;
   jt.name = f.at("name").identifier();
   jt.type = parseJointType(f.at("type"));
-  jt.parent = f.at("parent").identifier();
-  jt.child = f.at("child").identifier();
-  jt.position = f.at("position").vec3();
+  parseEnd(f.at("parent"), jt.parent, jt.parentNode);
+  parseEnd(f.at("child"), jt.child, jt.childNode);
+  // On a flexible node the joint may sit at the node (the default there).
+  jt.positionGiven = f.has("position");
+  if (jt.positionGiven) jt.position = f.at("position").vec3();
+  else if (!jt.parentNode && !jt.childNode)
+    throw SceneError(f.path() + ".position", "missing required field");
   if (f.has("axis")) jt.axis = f.at("axis").direction();
   if (f.has("cut")) jt.cut = f.at("cut").boolean();
   if (f.has("damping")) jt.damping = f.at("damping").nonNegative();
@@ -214,6 +218,7 @@ void parseSelection(const Field& f, bool& all, std::vector<std::string>& names) 
 
 }  // namespace
 
+void makeVirtualBodies(Scene& scene);    // coupling/virtual_bodies.cpp
 void chooseCutJoints(Scene& scene);      // validate.cpp
 void validateScene(const Scene& scene);  // validate.cpp
 FlexibleBodySpec parseFlexibleBody(const Field& f, const std::map<std::string, double>& params);  // parse_flexible.cpp
@@ -273,6 +278,7 @@ Scene parseScene(const std::string& text, const std::map<std::string, double>& p
     if (out.has("bodies")) parseSelection(out.at("bodies"), scene.outputs.allBodies, scene.outputs.bodies);
     if (out.has("joints")) parseSelection(out.at("joints"), scene.outputs.allJoints, scene.outputs.joints);
   }
+  makeVirtualBodies(scene);
   chooseCutJoints(scene);
   validateScene(scene);
   return scene;

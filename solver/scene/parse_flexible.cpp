@@ -222,7 +222,8 @@ FlexibleBodySpec parseFlexibleBody(const Field& f, const std::map<std::string, d
       b.loads.push_back(parseLoad(f.at("loads").at(i), n, params));
   if (f.has("outputs")) {
     const Field out = f.at("outputs");
-    out.expectObject({"nodes", "elements"}, {});
+    out.expectObject({"nodes", "elements", "energy"}, {});
+    if (out.has("energy")) b.outputEnergy = out.at("energy").boolean();
     if (out.has("nodes")) {
       const Field nodes = out.at("nodes");
       if (nodes.raw().is_string()) {

@@ -28,9 +28,9 @@ ForceSpec parseForce(const Field& f) {
                     "actuated"},
                    {"name", "body1", "point1", "body2", "point2"});
     s.kind = ForceSpec::Kind::SpringDamper;
-    s.body1 = f.at("body1").identifier();
+    parseEnd(f.at("body1"), s.body1, s.node1);
     s.point1 = f.at("point1").vec3();
-    s.body2 = f.at("body2").identifier();
+    parseEnd(f.at("body2"), s.body2, s.node2);
     s.point2 = f.at("point2").vec3();
     if (f.has("free_length")) s.freeLength = f.at("free_length").nonNegative();
     if (f.has("actuated")) s.actuated = f.at("actuated").boolean();
@@ -38,8 +38,8 @@ ForceSpec parseForce(const Field& f) {
     f.expectObject({"name", "type", "body1", "body2", "position", "orientation", "stiffness", "damping"},
                    {"name", "body1", "body2", "position", "stiffness"});
     s.kind = ForceSpec::Kind::Bushing;
-    s.body1 = f.at("body1").identifier();
-    s.body2 = f.at("body2").identifier();
+    parseEnd(f.at("body1"), s.body1, s.node1);
+    parseEnd(f.at("body2"), s.body2, s.node2);
     s.point1 = s.point2 = f.at("position").vec3();
     if (f.has("orientation")) {
       const Field o = f.at("orientation");
@@ -51,7 +51,7 @@ ForceSpec parseForce(const Field& f) {
   } else if (type == "applied_force") {
     f.expectObject({"name", "type", "body", "point", "frame"}, {"name", "body", "point"});
     s.kind = ForceSpec::Kind::AppliedForce;
-    s.body1 = f.at("body").identifier();
+    parseEnd(f.at("body"), s.body1, s.node1);
     s.point1 = f.at("point").vec3();
     if (f.has("frame")) {
       const std::string frame = f.at("frame").string();

@@ -4,6 +4,7 @@
 // No JSON types here: the rest of the solver never sees the file format.
 #pragma once
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -28,6 +29,10 @@ struct ParameterSpec {
 
 struct BodySpec {
   std::string name;
+  // A massless virtual body made by the assembly where a joint or force
+  // element touches a flexible node (coupling/virtual_bodies.cpp); never
+  // written by the user, not an output.
+  bool isVirtual = false;
   double mass = 0.0;
   Mat3 inertia = Mat3::Zero();  // about the centre of mass, body axes
   Vec3 centerOfMass = Vec3::Zero();  // in the body frame
@@ -37,6 +42,16 @@ struct BodySpec {
 
 enum class JointType { Revolute, Prismatic, Cylindrical, Universal, Spherical, Planar, Fixed, Free };
 
+// One end of a joint or force element on a flexible body: a node by index,
+// or by the distance `at` from node 0 along the line to the last node (a
+// node must lie there). `path` is the JSON path, for errors.
+struct NodeReference {
+  std::string flexibleBody;
+  int node = -1;
+  double at = -1.0;  // >= 0 when given instead of node
+  std::string path;
+};
+
 const char* jointTypeName(JointType type);
 
 // A joint between two bodies, placed in the design configuration: its frame
@@ -45,9 +60,11 @@ const char* jointTypeName(JointType type);
 struct JointSpec {
   std::string name;
   JointType type = JointType::Revolute;
-  std::string parent;  // body name or "ground"
+  std::string parent;  // body name or "ground" (a virtual body's, when the end is a node)
   std::string child;
+  std::optional<NodeReference> parentNode, childNode;  // ends on flexible nodes
   Vec3 position = Vec3::Zero();
+  bool positionGiven = true;  // may be left out when an end is a node: its position
   Vec3 axis = Vec3::UnitZ();
   bool cut = false;  // closes a loop (Lagrange multipliers) instead of a tree joint
   std::vector<double> initialCoordinates;  // size = joint DOF, or empty = zeros
@@ -56,6 +73,17 @@ struct JointSpec {
   bool torqueInput = false;  // an FMI input acting along the joint's DOFs
   bool driven = false;       // the (single) coordinate follows `drive`(t): a constraint row
   TimeFunction drive;
+  bool isVirtual = false;    // a virtual body's free joint to ground, made by the assembly
+};
+
+// A flexible body joint (DESIGN.md 3): welds a virtual body to a flexible
+// node with 6 constraint rows; its multipliers are the force and torque it
+// passes. Made by the assembly with the virtual body.
+struct FlexibleBodyJointSpec {
+  std::string name;          // "<joint or force>.<end>_flexible_body_joint"
+  std::string virtualBody;
+  int flexibleBody = 0;      // index into Scene::flexibleBodies
+  int node = 0;              // node of that body
 };
 
 // A support of a flexible node (Dirichlet condition, eliminated from the
@@ -105,6 +133,7 @@ struct FlexibleBodySpec {
   bool allNodes = false;          // outputs: every node, or those listed
   std::vector<int> outputNodes;
   std::vector<int> outputElements;
+  bool outputEnergy = false;      // kinetic, strain and gravity potential energy
 };
 
 // A force element between bodies (points in world coordinates of the design
@@ -117,6 +146,7 @@ struct ForceSpec {
   std::string name;
   Kind kind = Kind::SpringDamper;
   std::string body1 = kGround, body2 = kGround, joint;
+  std::optional<NodeReference> node1, node2;  // ends on flexible nodes (a virtual body each)
   Vec3 point1 = Vec3::Zero(), point2 = Vec3::Zero();
   Mat3 orientation = Mat3::Identity();  // bushing frame
   double stiffness = 0.0, damping = 0.0;
@@ -165,6 +195,7 @@ struct Scene {
   std::vector<JointSpec> joints;
   std::vector<FlexibleBodySpec> flexibleBodies;
   std::vector<ForceSpec> forces;
+  std::vector<FlexibleBodyJointSpec> flexibleBodyJoints;  // made with the virtual bodies
   OutputSelection outputs;
   // Static: each step solves equilibrium at the loads of its end time (load
   // stepping with Newton; halving on failure), no inertia.

@@ -31,6 +31,14 @@ def parent_loop(s):
     s["joints"].append({"name": "jb", "type": "revolute", "parent": "a", "child": "b", "position": [3, 0, 0]})
 
 
+def hang_from_beam(s):
+    """The pendulum's hinge on the tip of a clamped beam (a virtual body there)."""
+    s["flexible_bodies"] = [{"name": "beam", "beam": {"start": [0, 0, 0], "end": [1, 0, 0], "elements": 4},
+                             "section": {"shape": "circle", "d": 0.01}, "material": {"E": 2e11, "nu": 0.3, "rho": 7800},
+                             "supports": [{"node": 0, "type": "clamp"}]}]
+    s["joints"][0]["parent"] = {"flexible": "beam", "node": 4}
+
+
 def set_in(path, value):
     def change(s):
         node = s
@@ -87,6 +95,18 @@ CASES = [
          "section": {"shape": "circle", "d": 0.01}, "material": {"E": 2e11, "nu": 0.3, "rho": 7800},
          "supports": [{"node": 0, "type": "driven", "axis": [0, 0, 1]}]}]})),
      ["flexible_bodies[0].supports[0]: a driven support takes exactly one of"]),
+    ("joint on a node of an unknown flexible body", edit(lambda s: (hang_from_beam(s),
+        s["joints"][0].update({"parent": {"flexible": "rod", "node": 4}}))),
+     ["joints[0].parent.flexible: unknown flexible body \"rod\""]),
+    ("joint on a node out of range", edit(lambda s: (hang_from_beam(s),
+        s["joints"][0].update({"parent": {"flexible": "beam", "node": 9}}))),
+     ["joints[0].parent.node: expected a node index in 0..4 of 'beam', got 9"]),
+    ("joint between nodes", edit(lambda s: (hang_from_beam(s),
+        s["joints"][0].update({"parent": {"flexible": "beam", "at": 0.3}}))),
+     ["joints[0].parent.at: no node of 'beam' lies at 0.3 m from node 0", "choose an element count"]),
+    ("node end with node and at", edit(lambda s: (hang_from_beam(s),
+        s["joints"][0].update({"parent": {"flexible": "beam", "node": 4, "at": 1.0}}))),
+     ["joints[0].parent: expected exactly one of \"node\" (an index) or \"at\" (a distance)"]),
     ("duplicate names", edit(set_in(["joints", 0, "name"], "bob")),
      ["joints[0].name: duplicate name \"bob\" (already used at bodies[0].name)"]),
     ("unknown joint type", edit(set_in(["joints", 0, "type"], "hinge")), ["joints[0].type: unknown joint type \"hinge\""]),

@@ -1,0 +1,24 @@
+#include "flex/flexible_energy.hpp"
+
+namespace mfbd {
+
+FlexibleEnergy flexibleBodyEnergy(const FlexibleMesh& mesh, const FlexibleBody& body,
+                                  const std::vector<NodeState>& nodes, const Vec3& gravity) {
+  FlexibleEnergy e;
+  for (int i = body.firstNode; i < body.firstNode + body.nodeCount; ++i) {
+    const NodalInertia& in = mesh.nodes[i].inertia;
+    const NodeState& s = nodes[i];
+    e.kinetic += 0.5 * in.m * s.velocity.v.squaredNorm() + 0.5 * s.velocity.omega.dot(in.J * s.velocity.omega);
+    e.gravity -= nodalGravityForce(in, gravity).head<3>().dot(s.pose.r);
+  }
+  for (int k = body.firstElement; k < body.firstElement + body.elementCount; ++k) {
+    const FlexElement& el = mesh.elements[k];
+    const LocalDeformation d = localDeformation(el.beam, nodes[el.node1].pose, nodes[el.node2].pose);
+    Vec7 local;
+    local << d.u, d.theta1, d.theta2;
+    e.strain += 0.5 * local.dot(el.beam.localStiffness * local);
+  }
+  return e;
+}
+
+}  // namespace mfbd

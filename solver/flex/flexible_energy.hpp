@@ -1,0 +1,18 @@
+// Energies of a flexible body, for outputs (energy balance is how a user
+// checks a conservative run): kinetic 1/2 v^T M v of its nodal inertia,
+// strain 1/2 e_l^T K_l e_l of its elements' local deformations (the
+// potential whose gradient is the elastic internal force), and the
+// potential of gravity -sum f_g . r of its constant nodal gravity loads.
+#pragma once
+#include "flex/flexible_mesh.hpp"
+
+namespace mfbd {
+
+struct FlexibleEnergy {
+  double kinetic = 0.0, strain = 0.0, gravity = 0.0;
+};
+
+FlexibleEnergy flexibleBodyEnergy(const FlexibleMesh& mesh, const FlexibleBody& body,
+                                  const std::vector<NodeState>& nodes, const Vec3& gravity);
+
+}  // namespace mfbd

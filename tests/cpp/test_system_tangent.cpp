@@ -1,0 +1,170 @@
+// The coupled rigid + flexible System against finite differences of its own
+// residual: the iteration blocks dr/dq (along the retraction) and dr/dv, and
+// the constraint Jacobian Phi_q, for scenes where joints and force elements
+// touch flexible nodes through virtual bodies and flexible body joints.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "scene/scene.hpp"
+#include "system.hpp"
+
+using namespace mfbd;
+
+namespace {
+
+// A beam clamped at its root; a rigid hub on a revolute joint to ground drives
+// a second beam through a fixed joint (virtual body child of the hub); a
+// pendulum hangs from the first beam's tip by a spherical joint (virtual body
+// with a free joint); a spring joins the two beams (virtual bodies at both
+// ends); a revolute joint joins the second beam's tip to a slider body.
+const char* kScene = R"({
+  "format": "mfbd-scene/1", "name": "coupled", "gravity": [0, -9.81, 0],
+  "bodies": [
+    {"name": "hub", "mass": 2.0, "inertia": [0.1, 0.1, 0.2], "position": [0, 2, 0]},
+    {"name": "bob", "mass": 1.5, "inertia": [0.01, 0.02, 0.015], "position": [1.1, -0.4, 0.1],
+     "center_of_mass": [0.05, -0.1, 0]},
+    {"name": "slider", "mass": 0.7, "inertia": [0.01, 0.01, 0.01], "position": [1.2, 2.2, 0.3]}
+  ],
+  "joints": [
+    {"name": "hinge", "type": "revolute", "parent": "ground", "child": "hub", "position": [0, 2, 0], "axis": [0, 0, 1]},
+    {"name": "clamp", "type": "fixed", "parent": "hub", "child": {"flexible": "arm", "node": 0}, "position": [0.1, 2, 0]},
+    {"name": "hang", "type": "spherical", "parent": {"flexible": "beam", "at": 1.0}, "child": "bob"},
+    {"name": "pin", "type": "revolute", "parent": {"flexible": "arm", "node": 3}, "child": "slider",
+     "axis": [0, 1, 1]}
+  ],
+  "flexible_bodies": [
+    {"name": "beam", "beam": {"start": [0, 0, 0], "end": [1, 0, 0], "elements": 3, "section_y": [0, 1, 0]},
+     "section": {"EA": 1e4, "GAy": 5e3, "GAz": 5e3, "GJ": 20, "EIy": 30, "EIz": 40, "rhoA": 2, "rhoJ": [0.02, 0.01, 0.01]},
+     "supports": [{"node": 0, "type": "clamp"}], "damping": 0.01},
+    {"name": "arm", "beam": {"start": [0.1, 2, 0], "end": [1.3, 2.2, 0.3], "elements": 3, "section_y": [0, 0, 1]},
+     "section": {"EA": 1e4, "GAy": 5e3, "GAz": 5e3, "GJ": 20, "EIy": 30, "EIz": 40, "rhoA": 2, "rhoJ": [0.02, 0.01, 0.01]}}
+  ],
+  "forces": [
+    {"name": "spring", "type": "spring_damper", "body1": {"flexible": "beam", "node": 2}, "point1": [0.6667, 0, 0],
+     "body2": {"flexible": "arm", "node": 2}, "point2": [0.9, 2.1333, 0.2], "stiffness": 50, "damping": 3}
+  ]
+})";
+
+struct Evaluation {
+  VectorXd r, phi;
+};
+
+Evaluation evaluate(System& s, double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+                    const VectorXd& lambda) {
+  Evaluation e;
+  s.residual(t, q, v, vdot, lambda, e.r, e.phi);
+  return e;
+}
+
+Eigen::MatrixXd dense(const Triplets& t, int rows, int cols) {
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(rows, cols);
+  for (const auto& e : t) m(e.row(), e.col()) += e.value();
+  return m;
+}
+
+class CoupledSystem : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    Scene scene = parseScene(kScene);
+    system = std::make_unique<System>(assemble(scene));
+    n = system->velocityCount();
+    m = system->constraintCount();
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    auto random = [&](int size, double scale) {
+      VectorXd x(size);
+      for (int i = 0; i < size; ++i) x[i] = scale * u(rng);
+      return x;
+    };
+    // A deformed, moving state away from the design configuration (the
+    // constraints need not hold for a Jacobian check).
+    q = system->model().initialConfiguration;
+    system->retract(q, random(n, 0.2));
+    v = random(n, 1.0);
+    vdot = random(n, 1.0);
+    lambda = random(m, 10.0);
+  }
+
+  std::unique_ptr<System> system;
+  int n = 0, m = 0;
+  Configuration q;
+  VectorXd v, vdot, lambda;
+  const double t = 0.3;
+};
+
+}  // namespace
+
+TEST_F(CoupledSystem, MakesVirtualBodiesAndFlexibleBodyJoints) {
+  // clamp: child on a node; hang: parent on a node; pin: parent on a node;
+  // spring: both ends. Five welds, 30 rows, plus none from cut joints.
+  EXPECT_EQ(system->model().flexibleBodyJoints.size(), 5u);
+  EXPECT_EQ(m, 30);
+  int virtualBodies = 0;
+  for (const Body& b : system->model().bodies) virtualBodies += b.isVirtual ? 1 : 0;
+  EXPECT_EQ(virtualBodies, 5);
+}
+
+TEST_F(CoupledSystem, DesignConfigurationMeetsTheWelds) {
+  VectorXd r, phi;
+  system->residual(0.0, system->model().initialConfiguration, VectorXd::Zero(n), VectorXd::Zero(n),
+                   VectorXd::Zero(m), r, phi);
+  EXPECT_LT(phi.cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST_F(CoupledSystem, StiffnessBlockMatchesFiniteDifferences) {
+  Triplets iteration, jacobian;
+  system->tangent(t, q, v, vdot, lambda, 0.0, 0.0, 1.0, iteration, jacobian);
+  const Eigen::MatrixXd K = dense(iteration, n, n), G = dense(jacobian, m, n);
+  const double eps = 1e-6;
+  Eigen::MatrixXd Kfd(n, n), Gfd(m, n);
+  for (int i = 0; i < n; ++i) {
+    Configuration qp = q, qm = q;
+    VectorXd d = VectorXd::Zero(n);
+    d[i] = eps;
+    system->retract(qp, d);
+    system->retract(qm, -d);
+    const Evaluation p = evaluate(*system, t, qp, v, vdot, lambda), mm = evaluate(*system, t, qm, v, vdot, lambda);
+    Kfd.col(i) = (p.r - mm.r) / (2 * eps);
+    Gfd.col(i) = (p.phi - mm.phi) / (2 * eps);
+  }
+  // The rigid block is itself a one-sided difference (eps 1e-7) in the solver.
+  EXPECT_LT((K - Kfd).cwiseAbs().maxCoeff(), 1e-5 * Kfd.cwiseAbs().maxCoeff()) << (K - Kfd).cwiseAbs().maxCoeff();
+  EXPECT_LT((G - Gfd).cwiseAbs().maxCoeff(), 1e-7 * std::max(1.0, Gfd.cwiseAbs().maxCoeff()));
+}
+
+TEST_F(CoupledSystem, DampingAndMassBlocksMatchFiniteDifferences) {
+  Triplets C, M, unused;
+  system->tangent(t, q, v, vdot, lambda, 0.0, 1.0, 0.0, C, unused);
+  system->tangent(t, q, v, vdot, lambda, 1.0, 0.0, 0.0, M, unused);
+  const double eps = 1e-6;
+  Eigen::MatrixXd Cfd(n, n), Mfd(n, n);
+  for (int i = 0; i < n; ++i) {
+    VectorXd vp = v, vm = v, ap = vdot, am = vdot;
+    vp[i] += eps;
+    vm[i] -= eps;
+    ap[i] += eps;
+    am[i] -= eps;
+    Cfd.col(i) = (evaluate(*system, t, q, vp, vdot, lambda).r - evaluate(*system, t, q, vm, vdot, lambda).r) / (2 * eps);
+    Mfd.col(i) = (evaluate(*system, t, q, v, ap, lambda).r - evaluate(*system, t, q, v, am, lambda).r) / (2 * eps);
+  }
+  EXPECT_LT((dense(C, n, n) - Cfd).cwiseAbs().maxCoeff(), 1e-5 * Cfd.cwiseAbs().maxCoeff());
+  EXPECT_LT((dense(M, n, n) - Mfd).cwiseAbs().maxCoeff(), 1e-6 * Mfd.cwiseAbs().maxCoeff());
+}
+
+// gamma: d2/dt2 Phi(q(t)) = Phi_q vdot + gamma along a path with velocity v
+// and acceleration vdot (q(t) = q o exp(v t + vdot t^2 / 2) to second order).
+TEST_F(CoupledSystem, ConstraintAccelerationTermMatchesSecondDifferences) {
+  Triplets unused, jacobian;
+  system->tangent(t, q, v, vdot, lambda, 0.0, 0.0, 0.0, unused, jacobian);
+  const VectorXd predicted = dense(jacobian, m, n) * vdot + system->constraintAccelerationTerm(t, q, v);
+  const double h = 1e-4;
+  auto phiAt = [&](double s) {
+    Configuration qs = q;
+    system->retract(qs, v * s + 0.5 * vdot * s * s);
+    return evaluate(*system, t, qs, v, vdot, lambda).phi;
+  };
+  const VectorXd second = (phiAt(h) - 2 * phiAt(0.0) + phiAt(-h)) / (h * h);
+  EXPECT_LT((predicted - second).cwiseAbs().maxCoeff(), 1e-4 * std::max(1.0, second.cwiseAbs().maxCoeff()))
+      << (predicted - second).cwiseAbs().maxCoeff();
+}
