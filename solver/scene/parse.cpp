@@ -124,7 +124,7 @@ BodySpec parseBody(const Field& f) {
                  {"name", "mass", "inertia", "position"});
   BodySpec b;
   b.name = f.at("name").identifier();
-  b.mass = f.at("mass").positive();
+  b.mass = f.at("mass").nonNegative();  // 0: a massless body, its motion fixed by joints
   b.inertia = parseInertia(f.at("inertia"));
   if (f.has("center_of_mass")) b.centerOfMass = f.at("center_of_mass").vec3();
   b.position = f.at("position").vec3();
