@@ -51,10 +51,20 @@ bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std:
   return true;
 }
 
-bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial, double h) {
+GeneralizedAlpha::MatrixFactors GeneralizedAlpha::matrixFactors(double h) const {
   const double betaPrime = (1.0 - alphaM_) / (beta_ * h * h * (1.0 - alphaF_));
   const double gammaPrime = gamma_ / (beta_ * h);
-  if (assembleIterationMatrix(system, trial, 1.0, gammaPrime / betaPrime, 1.0 / betaPrime))
+  return {1.0, gammaPrime / betaPrime, 1.0 / betaPrime};
+}
+
+SparseMatrix GeneralizedAlpha::newtonMatrix(Dynamics& system, const IntegratorState& at, double h) const {
+  const MatrixFactors c = matrixFactors(h);
+  return iterationMatrix(system, at, c.cM, c.cC, c.cK);
+}
+
+bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial, double h) {
+  const MatrixFactors c = matrixFactors(h);
+  if (assembleIterationMatrix(system, trial, c.cM, c.cC, c.cK))
     solver_.analyzePattern(assembledIterationMatrix());
   if (solver_.factorize(assembledIterationMatrix()) != LinearSolver::Status::Ok) return false;
   factoredStep_ = h;
