@@ -190,7 +190,7 @@ void parseMesh(const Field& f, FlexibleBodySpec& b) {
 }  // namespace
 
 FlexibleBodySpec parseFlexibleBody(const Field& f, const std::map<std::string, double>& params) {
-  f.expectObject({"name", "beam", "nodes", "elements", "section_y", "section", "material", "damping", "supports",
+  f.expectObject({"name", "beam", "nodes", "elements", "section_y", "section", "material", "damping", "mass", "supports",
                   "point_masses", "loads", "outputs"},
                  {"name", "section"});
   FlexibleBodySpec b;
@@ -206,6 +206,11 @@ FlexibleBodySpec parseFlexibleBody(const Field& f, const std::map<std::string, d
   const Field material = f.has("material") ? f.at("material") : f;
   b.section = parseSection(f.at("section"), f.has("material") ? &material : nullptr);
   if (f.has("damping")) b.damping = f.at("damping").nonNegative();
+  if (f.has("mass")) {
+    const std::string mass = f.at("mass").string();
+    if (mass != "consistent" && mass != "lumped") f.at("mass").fail("expected \"consistent\" or \"lumped\"");
+    b.mass = mass == "lumped" ? BeamMass::Lumped : BeamMass::Consistent;
+  }
   const int n = int(b.nodes.size());
   if (f.has("supports"))
     for (std::size_t i = 0; i < f.at("supports").arraySize(); ++i)

@@ -49,6 +49,14 @@ def remove(path):
     return change
 
 
+def with_beam(**fields):
+    """The pendulum scene plus a small steel beam with the given extra fields."""
+    body = {"name": "beam", "beam": {"start": [0, 0, 0], "end": [1, 0, 0], "elements": 4},
+            "section": {"shape": "circle", "d": 0.01}, "material": {"E": 2e11, "nu": 0.3, "rho": 7800}}
+    body.update(fields)
+    return edit(lambda s: s.update({"flexible_bodies": [body]}))
+
+
 # (id, scene text, expected words in the single error line)
 CASES = [
     ("empty file", "", ["scene: empty file; expected a JSON object"]),
@@ -87,6 +95,8 @@ CASES = [
          "section": {"shape": "circle", "d": 0.01}, "material": {"E": 2e11, "nu": 0.3, "rho": 7800},
          "supports": [{"node": 0, "type": "driven", "axis": [0, 0, 1]}]}]})),
      ["flexible_bodies[0].supports[0]: a driven support takes exactly one of"]),
+    ("unknown beam mass", with_beam(mass="diagonal"),
+     ["flexible_bodies[0].mass: expected \"consistent\" or \"lumped\""]),
     ("duplicate names", edit(set_in(["joints", 0, "name"], "bob")),
      ["joints[0].name: duplicate name \"bob\" (already used at bodies[0].name)"]),
     ("unknown joint type", edit(set_in(["joints", 0, "type"], "hinge")), ["joints[0].type: unknown joint type \"hinge\""]),
