@@ -10,7 +10,7 @@
 
 #include "flex/beam_section.hpp"
 #include "math/rotation.hpp"
-#include "scene/expression.hpp"
+#include "scene/time_function.hpp"
 
 namespace mfbd {
 
