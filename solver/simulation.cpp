@@ -257,8 +257,9 @@ double Simulation::readFlexible(const Quantity& q) {
   if (q.kind == QuantityKind::ElementSectionForce) {
     const FlexElement& e = mesh.elements[q.index];
     const NodeState &a = system_.nodes()[e.node1], &b = system_.nodes()[e.node2];
-    const BeamForces f = internalForces(e.beam, a.pose, b.pose, a.velocity, b.velocity, e.damping, false);
-    const SectionForces s = sectionForces(e.beam, a.pose, b.pose, f.f);
+    Vec12 f;
+    if (!elementForce(e, a, b, system_.model().gravity, scene_.analysis == Analysis::Dynamic, f)) f.setZero();
+    const SectionForces s = sectionForces(e.beam, a.pose, b.pose, f);
     const Vec3* parts[4] = {&s.force1, &s.moment1, &s.force2, &s.moment2};
     return (*parts[q.component / 3])[q.component % 3];
   }

@@ -1,5 +1,6 @@
 // Scene flexible bodies -> FlexibleMesh: node coordinates and supports,
-// elements from their reference poses, lumped plus point-mass inertia,
+// elements from their reference poses and mass (consistent or lumped
+// translational, lumped rotary), point masses,
 // loads, drives and their FMI inputs.
 #include <Eigen/Eigenvalues>
 
@@ -72,6 +73,8 @@ void assembleFlexibleBodies(const Scene& scene, FlexibleMesh& mesh, std::vector<
       layOutNode(n, s, blocks, q0, v0, velocityCount);
       mesh.nodes.push_back(n);
     }
+    // Translational mass per node (the consistent mass's row sums lumped), to check it is there.
+    std::vector<double> translationalMass(spec.nodes.size(), 0.0);
     for (std::size_t e = 0; e < spec.elements.size(); ++e) {
       const int a = body.firstNode + spec.elements[e].first, c = body.firstNode + spec.elements[e].second;
       FlexElement el;
@@ -84,11 +87,15 @@ void assembleFlexibleBodies(const Scene& scene, FlexibleMesh& mesh, std::vector<
       } catch (const std::invalid_argument& err) {
         throw SceneError(path + ".elements[" + std::to_string(e) + "]", err.what());
       }
+      const bool lumped = spec.mass == BeamMass::Lumped;
+      if (!lumped) el.mass = spec.section.rhoA * el.beam.L0;
       for (int k = 1; k <= 2; ++k) {
         const NodalInertia half = lumpedNodalInertia(el.beam, k);
-        NodalInertia& target = mesh.nodes[k == 1 ? a : c].inertia;
-        target.m += half.m;
+        const int node = k == 1 ? a : c;
+        NodalInertia& target = mesh.nodes[node].inertia;
+        if (lumped) target.m += half.m;
         target.J += half.J;
+        translationalMass[node - body.firstNode] += half.m;
       }
       mesh.elements.push_back(el);
     }
@@ -96,6 +103,7 @@ void assembleFlexibleBodies(const Scene& scene, FlexibleMesh& mesh, std::vector<
       NodalInertia& target = mesh.nodes[body.firstNode + p.node].inertia;
       target.m += p.mass;
       target.J += p.inertia;
+      translationalMass[p.node] += p.mass;
     }
     for (const NodalLoadSpec& l : spec.loads) {
       FlexLoad load;
@@ -115,7 +123,7 @@ void assembleFlexibleBodies(const Scene& scene, FlexibleMesh& mesh, std::vector<
       for (int i = 0; i < body.nodeCount; ++i) {
         const FlexNode& n = mesh.nodes[body.firstNode + i];
         const bool freeRotation = n.rotation >= 0;
-        if ((n.scalarOffset >= 0 && !(n.inertia.m > 0.0)) ||
+        if ((n.scalarOffset >= 0 && !(translationalMass[i] > 0.0)) ||
             (freeRotation && !(Eigen::SelfAdjointEigenSolver<Mat3>(n.inertia.J).eigenvalues().minCoeff() > 0.0)))
           throw SceneError(path, "node " + std::to_string(i) + " of '" + spec.name +
                                      "' has no mass or rotary inertia on a free DOF; give the section rhoA and "

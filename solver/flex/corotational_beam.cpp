@@ -476,4 +476,10 @@ NodalInertia lumpedNodalInertia(const CorotationalBeam& beam, int node) {
   return inertia;
 }
 
+TranslationalInertiaForces consistentTranslationalForces(double mass, const Vec3& a1, const Vec3& a2,
+                                                         const Vec3& gravity) {
+  const Vec3 d1 = a1 - gravity, d2 = a2 - gravity;
+  return {mass / 6.0 * (2.0 * d1 + d2), mass / 6.0 * (d1 + 2.0 * d2)};
+}
+
 }  // namespace mfbd

@@ -86,7 +86,9 @@ bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const
 // Stress resultants at the element ends in the corotated element frame,
 // force (N, Vy, Vz) and moment (T, My, Mz); at each end the action of the
 // part at larger x on the part at smaller x (N > 0 in tension), computed
-// from an element force vector f as returned by internalForces.
+// from the forces f the nodes exert on the element: internalForces' f, plus
+// the element's own inertia minus weight when it has mass (elementForce in
+// flex/flexible_mesh.hpp).
 struct SectionForces {
   Vec3 force1 = Vec3::Zero(), moment1 = Vec3::Zero();  // at node 1 (x = 0)
   Vec3 force2 = Vec3::Zero(), moment2 = Vec3::Zero();  // at node 2 (x = l)
@@ -98,5 +100,22 @@ SectionForces sectionForces(const CorotationalBeam& beam, const NodePose& n1,
 // Lumped inertia of half the element at node 1 or 2 (node = 1 or 2):
 // m = rhoA L0 / 2, J = C_i diag(rhoJ) C_i^T L0 / 2 in the node frame.
 NodalInertia lumpedNodalInertia(const CorotationalBeam& beam, int node);
+
+// Consistent translational mass of the element (Crisfield, Galvanetto &
+// Jelenic, "Dynamics of 3-D co-rotational beams", Comput. Mech. 20, 1997):
+// the centre line interpolated linearly between the nodes,
+// r(x) = (1 - x/L0) r1 + (x/L0) r2, gives
+//   M_t = rhoA L0 / 6 [[2 I, I], [I, 2 I]]   on [rddot1; rddot2],
+// constant in the world frame: no convective or gyroscopic term, and no
+// position or velocity tangent. (The rotary inertia stays lumped at the
+// nodes, lumpedNodalInertia's J, where its gyroscopic term lives.)
+// The force on [r1; r2] is inertia minus weight, M_t [a1 - g; a2 - g]
+// (weight (rhoA L0 / 2) g per node, as lumped); `mass` = rhoA L0.
+struct TranslationalInertiaForces {
+  Vec3 f1 = Vec3::Zero(), f2 = Vec3::Zero();
+};
+
+TranslationalInertiaForces consistentTranslationalForces(double mass, const Vec3& a1, const Vec3& a2,
+                                                         const Vec3& gravity);
 
 }  // namespace mfbd

@@ -17,6 +17,11 @@ FlexibleEnergy flexibleBodyEnergy(const FlexibleMesh& mesh, const FlexibleBody& 
     Vec7 local;
     local << d.u, d.theta1, d.theta2;
     e.strain += 0.5 * local.dot(el.beam.localStiffness * local);
+    if (el.mass > 0.0) {  // consistent translational mass rhoA L0 / 6 [[2 I, I], [I, 2 I]], linear interpolation
+      const NodeState &a = nodes[el.node1], &b = nodes[el.node2];
+      e.kinetic += el.mass / 6.0 * (a.velocity.v.squaredNorm() + a.velocity.v.dot(b.velocity.v) + b.velocity.v.squaredNorm());
+      e.gravity -= el.mass * gravity.dot(0.5 * (a.pose.r + b.pose.r));
+    }
   }
   return e;
 }

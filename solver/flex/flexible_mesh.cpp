@@ -98,6 +98,19 @@ void scatter(const FlexNode& a, const FlexNode& b, const Mat6& B, Triplets& out)
 
 }  // namespace
 
+bool elementForce(const FlexElement& e, const NodeState& s1, const NodeState& s2, const Vec3& gravity,
+                  bool withInertia, Vec12& f) {
+  if (!internalForceVector(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping, f)) return false;
+  if (e.mass > 0.0) {
+    const Vec3 zero = Vec3::Zero();
+    const TranslationalInertiaForces m = consistentTranslationalForces(
+        e.mass, withInertia ? s1.acceleration.a : zero, withInertia ? s2.acceleration.a : zero, gravity);
+    f.segment<3>(0) += m.f1;
+    f.segment<3>(6) += m.f2;
+  }
+  return true;
+}
+
 bool flexibleResidual(const FlexibleMesh& mesh, const std::vector<NodeState>& nodes, const Vec3& gravity,
                       const VectorXd& inputs, double t, bool withInertia, VectorXd& r) {
   for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
@@ -107,9 +120,8 @@ bool flexibleResidual(const FlexibleMesh& mesh, const std::vector<NodeState>& no
     scatter(n, g, r);
   }
   for (const FlexElement& e : mesh.elements) {
-    const NodeState &s1 = nodes[e.node1], &s2 = nodes[e.node2];
     Vec12 f;
-    if (!internalForceVector(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping, f)) return false;
+    if (!elementForce(e, nodes[e.node1], nodes[e.node2], gravity, withInertia, f)) return false;
     scatter(mesh.nodes[e.node1], f.head<6>(), r);
     scatter(mesh.nodes[e.node2], f.tail<6>(), r);
   }
@@ -132,6 +144,15 @@ void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nod
     if (cK != 0.0 || cC != 0.0) {
       const BeamForces f = internalForces(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping);
       S = cK * f.K + cC * f.C;
+    }
+    if (e.mass > 0.0 && cM != 0.0) {  // cM M_t, rhoA L0 / 6 [[2 I, I], [I, 2 I]]
+      const double m = cM * e.mass / 6.0;
+      for (int i = 0; i < 3; ++i) {
+        S(i, i) += 2.0 * m;
+        S(6 + i, 6 + i) += 2.0 * m;
+        S(i, 6 + i) += m;
+        S(6 + i, i) += m;
+      }
     }
     const FlexNode &a = mesh.nodes[e.node1], &b = mesh.nodes[e.node2];
     const bool freeA = isFree(a), freeB = isFree(b);

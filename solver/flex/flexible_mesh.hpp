@@ -33,6 +33,9 @@ struct FlexElement {
   int node1 = 0, node2 = 0;  // mesh node indices
   CorotationalBeam beam;
   double damping = 0.0;
+  // rhoA L0 of the consistent translational mass (consistentTranslationalForces);
+  // 0 when the element's mass is lumped into its nodes' inertia.
+  double mass = 0.0;
 };
 
 struct FlexLoad {
@@ -88,6 +91,15 @@ struct DriveState {
 
 void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                         double t, const DriveState& drives, const VectorXd& inputs, std::vector<NodeState>& nodes);
+
+// What the nodes exert on element e, [f1 (world); m1 (node 1 frame); f2; m2]:
+// its internal force and, with consistent mass, its inertia minus its weight
+// (weight only without inertia, in statics). The element's end forces, so
+// also the section forces at its ends: with consistent mass they converge
+// faster than the internal force alone (nodal reactions of a Galerkin mesh).
+// False if the corotated frame is undefined.
+bool elementForce(const FlexElement& e, const NodeState& s1, const NodeState& s2, const Vec3& gravity,
+                  bool withInertia, Vec12& f);
 
 // r += inertia + internal forces - gravity - loads, on the free node DOFs.
 // Returns false if an element's corotated frame is undefined.

@@ -9,24 +9,29 @@
 namespace mfbd {
 namespace {
 
-// Recursive descent: sum := product (('+'|'-') product)*,
-// product := power (('*'|'/') power)*, power := unary ('^' power)?,
-// unary := '-' unary | primary, primary := number | name | name '(' sum ')' | '(' sum ')'.
+// Recursive descent emitting a postfix program: sum := product (('+'|'-')
+// product)*, product := power (('*'|'/') power)*, power := unary ('^' power)?,
+// unary := '-' unary | primary, primary := number | name | name '(' sum ')' |
+// '(' sum ')'.
 class Parser {
  public:
-  Parser(const std::string& text, const std::map<std::string, double>& parameters)
-      : s_(text), params_(parameters) {}
+  using Op = Expression::Op;
+  Parser(const std::string& text, const std::map<std::string, double>& parameters, const std::string& variable,
+         std::vector<Expression::Instruction>& program)
+      : s_(text), params_(parameters), variable_(variable), program_(program) {}
 
-  double parse() {
-    const double value = sum();
+  void parse() {
+    sum();
     skipSpace();
     if (pos_ != s_.size()) fail("unexpected '" + s_.substr(pos_, 1) + "'");
-    return value;
   }
 
  private:
   [[noreturn]] void fail(const std::string& what) const {
     throw std::invalid_argument("in expression \"" + s_ + "\": " + what);
+  }
+  void emit(Op op, double value = 0.0, double (*function)(double) = nullptr) {
+    program_.push_back({op, value, function});
   }
   void skipSpace() {
     while (pos_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[pos_]))) ++pos_;
@@ -39,38 +44,37 @@ class Parser {
     }
     return false;
   }
-  double sum() {
-    double value = product();
+  void sum() {
+    product();
     for (;;) {
-      if (accept('+')) value += product();
-      else if (accept('-')) value -= product();
-      else return value;
+      if (accept('+')) product(), emit(Op::Add);
+      else if (accept('-')) product(), emit(Op::Subtract);
+      else return;
     }
   }
-  double product() {
-    double value = power();
+  void product() {
+    power();
     for (;;) {
-      if (accept('*')) value *= power();
-      else if (accept('/')) value /= power();
-      else return value;
+      if (accept('*')) power(), emit(Op::Multiply);
+      else if (accept('/')) power(), emit(Op::Divide);
+      else return;
     }
   }
-  double power() {
-    const double base = unary();
-    if (accept('^')) return std::pow(base, power());
-    return base;
+  void power() {
+    unary();
+    if (accept('^')) power(), emit(Op::Power);
   }
-  double unary() {
-    if (accept('-')) return -unary();
-    if (accept('+')) return unary();
-    return primary();
+  void unary() {
+    if (accept('-')) unary(), emit(Op::Negate);
+    else if (accept('+')) unary();
+    else primary();
   }
-  double primary() {
+  void primary() {
     skipSpace();
     if (accept('(')) {
-      const double value = sum();
+      sum();
       if (!accept(')')) fail("missing ')'");
-      return value;
+      return;
     }
     if (pos_ >= s_.size()) fail("unexpected end");
     const char c = s_[pos_];
@@ -78,7 +82,7 @@ class Parser {
     if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') return nameOrCall();
     fail("unexpected '" + std::string(1, c) + "'");
   }
-  double number() {
+  void number() {
     std::size_t used = 0;
     double value = 0.0;
     try {
@@ -89,83 +93,108 @@ class Parser {
       fail("bad number");
     }
     pos_ += used;
-    return value;
+    emit(Op::Number, value);
   }
-  double nameOrCall() {
+  void nameOrCall() {
     const std::size_t start = pos_;
     while (pos_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '_'))
       ++pos_;
     const std::string name = s_.substr(start, pos_ - start);
     if (accept('(')) {
-      std::vector<double> args = {sum()};
-      while (accept(',')) args.push_back(sum());
+      std::size_t n = 1;
+      sum();
+      while (accept(',')) sum(), ++n;
       if (!accept(')')) fail("missing ')' after " + name + "(");
-      return call(name, args);
+      return call(name, n);
     }
-    if (name == "pi") return M_PI;
+    if (!variable_.empty() && name == variable_) return emit(Op::Variable);
+    if (name == "pi") return emit(Op::Number, M_PI);
     const auto it = params_.find(name);
     if (it == params_.end()) fail("unknown parameter '" + name + "'");
-    return it->second;
+    emit(Op::Number, it->second);
   }
-  double call(const std::string& f, const std::vector<double>& a) const {
-    const std::size_t n = a.size();
+  void call(const std::string& f, std::size_t n) {
     auto arity = [&](std::size_t want) {
       if (n != want) fail(f + "() takes " + std::to_string(want) + " argument(s), got " + std::to_string(n));
     };
     if (f == "min" || f == "max") {
       arity(2);
-      return f == "min" ? std::min(a[0], a[1]) : std::max(a[0], a[1]);
+      return emit(f == "min" ? Op::Min : Op::Max);
     }
     if (f == "if") {  // if(c, a, b): a where c > 0, else b
       arity(3);
-      return a[0] > 0.0 ? a[1] : a[2];
+      return emit(Op::If);
     }
+    static const std::map<std::string, double (*)(double)> functions = {
+        {"sqrt", [](double x) { return std::sqrt(x); }}, {"sin", [](double x) { return std::sin(x); }},
+        {"cos", [](double x) { return std::cos(x); }},   {"tan", [](double x) { return std::tan(x); }},
+        {"asin", [](double x) { return std::asin(x); }}, {"acos", [](double x) { return std::acos(x); }},
+        {"atan", [](double x) { return std::atan(x); }}, {"exp", [](double x) { return std::exp(x); }},
+        {"log", [](double x) { return std::log(x); }},   {"abs", [](double x) { return std::abs(x); }}};
+    const auto it = functions.find(f);
+    if (it == functions.end()) fail("unknown function '" + f + "'");
     arity(1);
-    const double x = a[0];
-    if (f == "sqrt") return std::sqrt(x);
-    if (f == "sin") return std::sin(x);
-    if (f == "cos") return std::cos(x);
-    if (f == "tan") return std::tan(x);
-    if (f == "asin") return std::asin(x);
-    if (f == "acos") return std::acos(x);
-    if (f == "atan") return std::atan(x);
-    if (f == "exp") return std::exp(x);
-    if (f == "log") return std::log(x);
-    if (f == "abs") return std::abs(x);
-    fail("unknown function '" + f + "'");
+    emit(Op::Function, 0.0, it->second);
   }
 
   const std::string& s_;
   const std::map<std::string, double>& params_;
+  const std::string& variable_;
+  std::vector<Expression::Instruction>& program_;
   std::size_t pos_ = 0;
 };
 
 }  // namespace
 
+Expression::Expression(const std::string& text, const std::map<std::string, double>& parameters,
+                       const std::string& variable) {
+  program_.clear();
+  Parser(text, parameters, variable, program_).parse();
+}
+
+// A stack machine over the postfix program; the parser's grammar bounds the
+// depth by the program length.
+double Expression::operator()(double variable) const {
+  constexpr std::size_t kSmall = 32;
+  double small[kSmall] = {};
+  std::vector<double> large;
+  double* stack = small;
+  if (program_.size() > kSmall) {
+    large.resize(program_.size());
+    stack = large.data();
+  }
+  std::size_t top = 0;  // number of values on the stack
+  for (const Instruction& i : program_) {
+    switch (i.op) {
+      case Op::Number: stack[top++] = i.value; break;
+      case Op::Variable: stack[top++] = variable; break;
+      case Op::Negate: stack[top - 1] = -stack[top - 1]; break;
+      case Op::Function: stack[top - 1] = i.function(stack[top - 1]); break;
+      case Op::If:
+        top -= 2;
+        stack[top - 1] = stack[top - 1] > 0.0 ? stack[top] : stack[top + 1];
+        break;
+      default: {
+        const double b = stack[--top];
+        double& a = stack[top - 1];
+        switch (i.op) {
+          case Op::Add: a += b; break;
+          case Op::Subtract: a -= b; break;
+          case Op::Multiply: a *= b; break;
+          case Op::Divide: a /= b; break;
+          case Op::Power: a = std::pow(a, b); break;
+          case Op::Min: a = std::min(a, b); break;
+          case Op::Max: a = std::max(a, b); break;
+          default: break;
+        }
+      }
+    }
+  }
+  return stack[0];
+}
+
 double evaluateExpression(const std::string& text, const std::map<std::string, double>& parameters) {
-  return Parser(text, parameters).parse();
-}
-
-TimeFunction::TimeFunction(std::string expression, std::map<std::string, double> parameters)
-    : expression_(std::move(expression)), parameters_(std::move(parameters)) {
-  parameters_["t"] = 0.0;
-}
-
-double TimeFunction::operator()(double t) const {
-  std::map<std::string, double> p = parameters_;
-  p["t"] = t;
-  return evaluateExpression(expression_, p);
-}
-
-// Steps balance truncation (h^2) against round-off (eps/h, eps/h^2).
-double TimeFunction::rate(double t) const {
-  const double h = 1e-5 * std::max(1.0, std::abs(t));
-  return ((*this)(t + h) - (*this)(t - h)) / (2.0 * h);
-}
-
-double TimeFunction::acceleration(double t) const {
-  const double h = 1e-4 * std::max(1.0, std::abs(t));
-  return ((*this)(t + h) - 2.0 * (*this)(t) + (*this)(t - h)) / (h * h);
+  return Expression(text, parameters)();
 }
 
 }  // namespace mfbd

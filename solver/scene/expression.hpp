@@ -1,31 +1,39 @@
 // Arithmetic expressions over user parameters, for numeric scene fields:
 // numbers, parameter names, + - * / ^, parentheses, unary minus, pi, and the
 // functions sqrt sin cos tan asin acos atan exp log abs, min(a, b), max(a, b)
-// and if(c, a, b) (a where c > 0, else b). Time functions see the variable t.
+// and if(c, a, b) (a where c > 0, else b). Time functions see the variable t
+// (scene/time_function.hpp).
 #pragma once
 #include <map>
 #include <string>
+#include <vector>
 
 namespace mfbd {
 
-// Throws std::invalid_argument with a message naming the offending token.
-double evaluateExpression(const std::string& text, const std::map<std::string, double>& parameters);
-
-// A function of time t given by the scene as an expression over its
-// parameters and t ("6*t", "if(15 - t, ..., ...)"); "1" when not given.
-class TimeFunction {
+// An expression parsed once (parameters bound to their values) into a
+// postfix program, then evaluated for any value of its one free variable:
+// time functions are evaluated at every residual, so they must not re-parse.
+class Expression {
  public:
-  TimeFunction() = default;
-  TimeFunction(std::string expression, std::map<std::string, double> parameters);
-  double operator()(double t) const;
-  // d/dt and d2/dt2 by central differences (smooth expressions assumed).
-  double rate(double t) const;
-  double acceleration(double t) const;
-  const std::string& expression() const { return expression_; }
+  Expression() = default;  // the constant 1
+  // `variable` (e.g. "t"; empty: none) is free; every other name must be a
+  // parameter. Throws std::invalid_argument naming the offending token.
+  Expression(const std::string& text, const std::map<std::string, double>& parameters,
+             const std::string& variable = "");
+  double operator()(double variable = 0.0) const;
+
+  enum class Op { Number, Variable, Add, Subtract, Multiply, Divide, Power, Negate, Min, Max, If, Function };
+  struct Instruction {
+    Op op = Op::Number;
+    double value = 0.0;              // Number
+    double (*function)(double) = nullptr;  // Function
+  };
 
  private:
-  std::string expression_ = "1";
-  std::map<std::string, double> parameters_;
+  std::vector<Instruction> program_{Instruction{Op::Number, 1.0, nullptr}};
 };
+
+// Parses and evaluates at once (fields that are plain numbers).
+double evaluateExpression(const std::string& text, const std::map<std::string, double>& parameters);
 
 }  // namespace mfbd

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "scene/expression.hpp"
+#include "scene/time_function.hpp"
 #include "scene/scene.hpp"
 
 namespace mfbd {
@@ -35,13 +36,10 @@ class Field {
   const json& raw() const { return j_; }
   const std::map<std::string, double>& parameters() const { return params_; }
 
-  // The text of a time function: a string as written, a number in full precision.
-  std::string expressionText() const {
-    if (j_.is_string()) return j_.get<std::string>();
-    char text[32];
-    std::snprintf(text, sizeof text, "%.17g", number());
-    return text;
-  }
+  // A function of time: an expression of t (a string, or a number) or
+  // {"table": [[t, value], ...]}; finite at t = 0 (`what` names the
+  // quantity in the error).
+  TimeFunction timeFunction(const std::string& what) const;
   const std::string& path() const { return path_; }
   [[noreturn]] void fail(const std::string& message) const { throw SceneError(path_, message); }
 
@@ -108,6 +106,13 @@ class Field {
     return value;
   }
 
+  // A number in full precision as expression text.
+  std::string expressionText() const {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.17g", number());
+    return text;
+  }
+
   int integer() const {
     if (!j_.is_number_integer()) fail("expected an integer, got " + typeName(j_));
     return j_.get<int>();
@@ -169,6 +174,47 @@ inline void parseEnd(const Field& f, std::string& body, std::optional<NodeRefere
   }
   body.clear();
   node = r;
+}
+
+// [[t0, v0], [t1, v1], ...]: at least two points, times increasing.
+inline TimeFunction timeTable(const Field& f) {
+  const std::size_t n = f.arraySize();
+  if (n < 2) f.fail("expected at least 2 [t, value] points, got " + std::to_string(n));
+  std::vector<double> times(n), values(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Field point = f.at(i);
+    if (point.arraySize() != 2) point.fail("expected a [t, value] pair");
+    times[i] = point.at(0).number();
+    values[i] = point.at(1).number();
+    if (i > 0 && !(times[i] > times[i - 1]))
+      point.at(0).fail("expected times increasing, got " + std::to_string(times[i]) + " after " +
+                       std::to_string(times[i - 1]));
+  }
+  try {
+    return TimeFunction::table(times, values);
+  } catch (const std::invalid_argument& e) {
+    f.fail(e.what());
+  }
+}
+
+inline TimeFunction Field::timeFunction(const std::string& what) const {
+  TimeFunction f;
+  if (j_.is_object()) {
+    expectObject({"table"}, {"table"});
+    f = timeTable(at("table"));
+  } else if (j_.is_number()) {
+    f = TimeFunction(expressionText(), params_);
+  } else if (j_.is_string()) {
+    try {
+      f = TimeFunction(j_.get<std::string>(), params_);
+    } catch (const std::invalid_argument& e) {
+      fail(e.what());
+    }
+  } else {
+    fail("expected an expression of t or {\"table\": [[t, value], ...]}, got " + typeName(j_));
+  }
+  if (!std::isfinite(f(0.0))) fail("expected a finite " + what + " at t = 0");
+  return f;
 }
 
 }  // namespace mfbd

@@ -160,14 +160,8 @@ JointSpec parseJoint(const Field& f) {
   if (f.has("damping")) jt.damping = f.at("damping").nonNegative();
   if (f.has("actuated")) jt.torqueInput = f.at("actuated").boolean();
   if (f.has("drive")) {
-    const Field d = f.at("drive");
     jt.driven = true;
-    jt.drive = TimeFunction(d.expressionText(), f.parameters());
-    try {
-      if (!std::isfinite(jt.drive(0.0))) d.fail("expected a finite coordinate at t = 0");
-    } catch (const std::invalid_argument& e) {
-      d.fail(e.what());
-    }
+    jt.drive = f.at("drive").timeFunction("coordinate");
   }
   if (f.has("initial")) {
     const Field init = f.at("initial");
@@ -221,7 +215,7 @@ void parseSelection(const Field& f, bool& all, std::vector<std::string>& names) 
 void makeVirtualBodies(Scene& scene);    // coupling/virtual_bodies.cpp
 void chooseCutJoints(Scene& scene);      // validate.cpp
 void validateScene(const Scene& scene);  // validate.cpp
-FlexibleBodySpec parseFlexibleBody(const Field& f, const std::map<std::string, double>& params);  // parse_flexible.cpp
+FlexibleBodySpec parseFlexibleBody(const Field& f);  // parse_flexible.cpp
 ForceSpec parseForce(const Field& f);  // parse_forces.cpp
 
 Scene parseScene(const std::string& text, const std::map<std::string, double>& parameterValues) {
@@ -266,7 +260,7 @@ Scene parseScene(const std::string& text, const std::map<std::string, double>& p
   if (root.has("flexible_bodies")) {
     const Field flexible = root.at("flexible_bodies");
     for (std::size_t i = 0; i < flexible.arraySize(); ++i)
-      scene.flexibleBodies.push_back(parseFlexibleBody(flexible.at(i), params));
+      scene.flexibleBodies.push_back(parseFlexibleBody(flexible.at(i)));
   }
   if (root.has("forces")) {
     const Field forces = root.at("forces");

@@ -11,7 +11,7 @@
 
 #include "flex/beam_section.hpp"
 #include "math/rotation.hpp"
-#include "scene/expression.hpp"
+#include "scene/time_function.hpp"
 
 namespace mfbd {
 
@@ -117,6 +117,11 @@ struct NodalLoadSpec {
   bool input = false;
 };
 
+// Translational inertia of a flexible body's elements: the consistent mass
+// of the linearly interpolated centre line, or half of each element lumped
+// at its nodes. The rotary inertia is lumped at the nodes either way.
+enum class BeamMass { Consistent, Lumped };
+
 // A flexible body: nodes (position; orientation of a beam line's section
 // frame), two-node corotational beam elements, one section and material.
 struct FlexibleBodySpec {
@@ -127,6 +132,7 @@ struct FlexibleBodySpec {
   Vec3 sectionY = Vec3::UnitY();  // section y axis in the design configuration (world)
   BeamSection section;
   double damping = 0.0;           // stiffness-proportional damping coefficient, s
+  BeamMass mass = BeamMass::Consistent;
   std::vector<SupportSpec> supports;
   std::vector<PointMassSpec> pointMasses;
   std::vector<NodalLoadSpec> loads;

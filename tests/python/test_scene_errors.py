@@ -57,6 +57,14 @@ def remove(path):
     return change
 
 
+def with_beam(**fields):
+    """The pendulum scene plus a small steel beam with the given extra fields."""
+    body = {"name": "beam", "beam": {"start": [0, 0, 0], "end": [1, 0, 0], "elements": 4},
+            "section": {"shape": "circle", "d": 0.01}, "material": {"E": 2e11, "nu": 0.3, "rho": 7800}}
+    body.update(fields)
+    return edit(lambda s: s.update({"flexible_bodies": [body]}))
+
+
 # (id, scene text, expected words in the single error line)
 CASES = [
     ("empty file", "", ["scene: empty file; expected a JSON object"]),
@@ -107,6 +115,19 @@ CASES = [
     ("node end with node and at", edit(lambda s: (hang_from_beam(s),
         s["joints"][0].update({"parent": {"flexible": "beam", "node": 4, "at": 1.0}}))),
      ["joints[0].parent: expected exactly one of \"node\" (an index) or \"at\" (a distance)"]),
+    ("unknown beam mass", with_beam(mass="diagonal"),
+     ["flexible_bodies[0].mass: expected \"consistent\" or \"lumped\""]),
+    ("table of one point", with_beam(loads=[{"node": 4, "force": [0, 1, 0], "scale": {"table": [[0, 1]]}}]),
+     ["flexible_bodies[0].loads[0].scale.table: expected at least 2 [t, value] points, got 1"]),
+    ("table times not increasing", with_beam(supports=[{"node": 0, "type": "driven", "axis": [0, 0, 1],
+                                                        "angle": {"table": [[0, 0], [1, 1], [1, 2]]}}]),
+     ["flexible_bodies[0].supports[0].angle.table[2][0]: expected times increasing, got 1.000000 after 1.000000"]),
+    ("table value not finite", edit(set_in(["joints", 0, "drive"], {"table": [[0, 0], [1, "1/0"]]})),
+     ["joints[0].drive.table[1][1]: expected a finite number"]),
+    ("table point not a pair", edit(set_in(["joints", 0, "drive"], {"table": [[0, 0], [1, 2, 3]]})),
+     ["joints[0].drive.table[1]: expected a [t, value] pair"]),
+    ("time function object without table", edit(set_in(["joints", 0, "drive"], {"points": [[0, 0], [1, 1]]})),
+     ["joints[0].drive.points: unknown key; expected one of: table"]),
     ("duplicate names", edit(set_in(["joints", 0, "name"], "bob")),
      ["joints[0].name: duplicate name \"bob\" (already used at bodies[0].name)"]),
     ("unknown joint type", edit(set_in(["joints", 0, "type"], "hinge")), ["joints[0].type: unknown joint type \"hinge\""]),

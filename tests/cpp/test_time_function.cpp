@@ -1,0 +1,116 @@
+// Scene expressions (compiled once, evaluated per call) and tabulated time
+// functions (C2 cubic spline with zero end slopes, held outside the table).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <vector>
+
+#include "scene/time_function.hpp"
+
+using namespace mfbd;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+TimeFunction sampled(double (*f)(double), double t0, double t1, int intervals) {
+  std::vector<double> t, y;
+  for (int i = 0; i <= intervals; ++i) {
+    t.push_back(t0 + (t1 - t0) * i / intervals);
+    y.push_back(f(t.back()));
+  }
+  return TimeFunction::table(t, y);
+}
+
+// A cycloidal ramp from 0 to 1 over [0, 1]: at rest (zero rate and
+// acceleration) at both ends.
+double ramp(double t) { return t - std::sin(2 * kPi * t) / (2 * kPi); }
+double rampRate(double t) { return 1 - std::cos(2 * kPi * t); }
+double rampAcceleration(double t) { return 2 * kPi * std::sin(2 * kPi * t); }
+
+struct Errors {
+  double value = 0, rate = 0, acceleration = 0;
+};
+
+Errors maxErrors(const TimeFunction& f) {
+  Errors e;
+  for (int k = 0; k <= 1000; ++k) {
+    const double t = k / 1000.0;
+    e.value = std::max(e.value, std::abs(f(t) - ramp(t)));
+    e.rate = std::max(e.rate, std::abs(f.rate(t) - rampRate(t)));
+    e.acceleration = std::max(e.acceleration, std::abs(f.acceleration(t) - rampAcceleration(t)));
+  }
+  return e;
+}
+
+}  // namespace
+
+TEST(Expression, PrecedenceFunctionsAndTheTimeVariable) {
+  const std::map<std::string, double> p = {{"a", 2.0}, {"b", 3.0}};
+  EXPECT_DOUBLE_EQ(evaluateExpression("1 + a*b^2 - -4/2", p), 1 + 2 * 9 + 2);
+  EXPECT_DOUBLE_EQ(evaluateExpression("2^3^2", p), 512.0);  // right-associative
+  EXPECT_DOUBLE_EQ(evaluateExpression("-2^2", p), 4.0);     // unary minus binds first
+  EXPECT_DOUBLE_EQ(evaluateExpression("min(a, b) + max(a, b) + if(a - b, 10, 20)", p), 2 + 3 + 20);
+  EXPECT_DOUBLE_EQ(evaluateExpression("sqrt(16) + abs(-1) + exp(0) + log(1) + cos(0)", p), 7.0);
+  EXPECT_NEAR(evaluateExpression("sin(pi/6) + tan(pi/4) + asin(1) + acos(1) + atan(1)", p),
+              0.5 + 1 + kPi / 2 + kPi / 4, 1e-15);
+  const TimeFunction f("a*t^2 + if(t - 1, b, 0)", p);
+  EXPECT_DOUBLE_EQ(f(0.5), 0.5);
+  EXPECT_DOUBLE_EQ(f(2.0), 11.0);
+  EXPECT_NEAR(f.rate(0.5), 2.0, 1e-9);
+  EXPECT_NEAR(f.acceleration(0.5), 4.0, 1e-6);
+  EXPECT_DOUBLE_EQ(TimeFunction()(3.0), 1.0);
+  EXPECT_THROW(evaluateExpression("t + 1", p), std::invalid_argument);  // no time outside time functions
+  EXPECT_THROW(evaluateExpression("sin(1, 2)", p), std::invalid_argument);
+  EXPECT_THROW(evaluateExpression("foo(1)", p), std::invalid_argument);
+  EXPECT_THROW(evaluateExpression("(1 + 2", p), std::invalid_argument);
+  EXPECT_THROW(TimeFunction("t * c", p), std::invalid_argument);
+}
+
+TEST(TimeFunction, TableReproducesACubicAtRestAtItsEnds) {
+  // The smooth step 3 s^2 - 2 s^3 on [1, 3] is a cubic with zero end slopes:
+  // the spline through any of its samples is the step itself.
+  auto step = [](double t) {
+    const double s = (t - 1) / 2;
+    return s * s * (3 - 2 * s);
+  };
+  const std::vector<double> t = {1.0, 1.3, 2.1, 2.2, 3.0};
+  std::vector<double> y;
+  for (double ti : t) y.push_back(step(ti));
+  const TimeFunction f = TimeFunction::table(t, y);
+  for (double x = 1.005; x < 3.0; x += 0.01) {  // inside: the acceleration jumps to 0 at the ends
+    const double s = (x - 1) / 2;
+    EXPECT_NEAR(f(x), step(x), 1e-14);
+    EXPECT_NEAR(f.rate(x), 3 * s * (1 - s), 1e-13);
+    EXPECT_NEAR(f.acceleration(x), 1.5 * (1 - 2 * s), 1e-12);
+  }
+  // Held outside, at rest.
+  EXPECT_EQ(f(0.0), 0.0);
+  EXPECT_EQ(f(5.0), 1.0);
+  EXPECT_EQ(f.rate(5.0), 0.0);
+  EXPECT_EQ(f.acceleration(-1.0), 0.0);
+  // Two points: the same smooth step.
+  const TimeFunction two = TimeFunction::table({1.0, 3.0}, {0.0, 1.0});
+  EXPECT_NEAR(two(1.7), step(1.7), 1e-15);
+}
+
+TEST(TimeFunction, TableConvergesAtFourthOrderForASmoothRamp) {
+  const Errors coarse = maxErrors(sampled(ramp, 0.0, 1.0, 10));
+  const Errors fine = maxErrors(sampled(ramp, 0.0, 1.0, 20));
+  std::printf("[ table ] 10 -> 20 intervals: value %.2e -> %.2e, rate %.2e -> %.2e, acceleration %.2e -> %.2e\n",
+              coarse.value, fine.value, coarse.rate, fine.rate, coarse.acceleration, fine.acceleration);
+  EXPECT_LT(fine.value, 1e-5);
+  EXPECT_GT(std::log2(coarse.value / fine.value), 3.8);
+  EXPECT_GT(std::log2(coarse.rate / fine.rate), 2.8);
+  EXPECT_GT(std::log2(coarse.acceleration / fine.acceleration), 1.8);
+}
+
+TEST(TimeFunction, BadTablesAreRejected) {
+  EXPECT_THROW(TimeFunction::table({0.0}, {1.0}), std::invalid_argument);
+  EXPECT_THROW(TimeFunction::table({0.0, 1.0, 1.0}, {0.0, 1.0, 2.0}), std::invalid_argument);
+  EXPECT_THROW(TimeFunction::table({0.0, 2.0, 1.0}, {0.0, 1.0, 2.0}), std::invalid_argument);
+  EXPECT_THROW(TimeFunction::table({0.0, 1.0}, {0.0, NAN}), std::invalid_argument);
+  EXPECT_THROW(TimeFunction::table({0.0, 1.0}, {0.0}), std::invalid_argument);
+}
