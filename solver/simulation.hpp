@@ -68,11 +68,14 @@ class Simulation {
   bool write(const Quantity& q, double value);
 
  private:
-  void evaluateOutputs();
+  void evaluateOutputs(bool reactions);
 
   void updateQuaternions(bool reset);
   bool assembleConstraints(std::string& message, std::vector<std::string>* notes);
   std::string constraintOwner(int row) const;
+  std::string constraintOwners(const std::vector<int>& rows) const;
+  Eigen::MatrixXd constraintJacobian(const Configuration& q, const VectorXd& v);
+  std::string redundantConstraints(const Configuration& q, const VectorXd& v, bool vanishing);
   double readFlexible(const Quantity& q);
   void setInput(double& slot, double value);
 
@@ -84,6 +87,7 @@ class Simulation {
   std::vector<Quat> orientation_;            // sign-continuous across steps: scene bodies, then mesh nodes
   VectorXd outputLambda_;  // multipliers of the evaluated outputs
   bool outputsCurrent_ = false;
+  bool reactionsCurrent_ = false;  // the evaluated outputs include consistent reactions
   bool inputsChangedSinceStep_ = false;
 };
 

@@ -1,5 +1,7 @@
 #include "system.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "coupling/joint_constraint.hpp"
@@ -67,9 +69,14 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
   }
   applyForceElements(model_.forces, forceInputs_, data_);
   phi.setZero(model_.constraintCount);
+  constraintLengthScale_ = 1.0;
   for (const Joint& j : model_.joints) {
+    if (j.driven) constraintLengthScale_ = std::max(constraintLengthScale_, std::abs(q.scalars[j.scalarOffset]));
     if (!j.cut) continue;
     const int parent = j.parentMarker.body, child = j.childMarker.body;
+    const double reach = std::max(poseOf(data_, parent).r.norm() + j.parentMarker.position.norm(),
+                                  poseOf(data_, child).r.norm() + j.childMarker.position.norm());
+    constraintLengthScale_ = std::max(constraintLengthScale_, reach);
     const ConstraintEvaluation c = evaluateJointConstraint(constraintOf(j), poseOf(data_, parent), poseOf(data_, child));
     const int m = int(c.phi.size());
     phi.segment(j.constraintOffset, m) = c.phi;

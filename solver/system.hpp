@@ -40,6 +40,7 @@ class System : public Dynamics {
   void tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian) override;
   VectorXd constraintAccelerationTerm(double t, const Configuration& q, const VectorXd& v) override;
+  double constraintLengthScale() const override { return constraintLengthScale_; }
 
   // Force and torque a cut joint passes to its child (child marker frame,
   // about its origin), from the multipliers (after evaluate()).
@@ -62,6 +63,7 @@ class System : public Dynamics {
   DriveState drives_;
   std::vector<NodeState> nodes_;
   VectorXd tau_, rigid_;
+  double constraintLengthScale_ = 1.0;  // of the last residual
 };
 
 }  // namespace mfbd

@@ -26,10 +26,12 @@ class GeneralizedAlpha : public TimeStepper {
 
  private:
   bool factorize(Dynamics& system, const IntegratorState& trial, double h);
+  double constraintNoise(const Dynamics& system, int n, int m) const;
 
   double alphaM_, alphaF_, gamma_, beta_;
   LinearSolver solver_;
   double factoredStep_ = 0.0;  // substep size of the current factorization; 0 = none
+  double correctionNoise_ = 0.0;  // of the current factorization (constraintNoise)
 };
 
 }  // namespace mfbd
