@@ -64,6 +64,20 @@ Eigen::MatrixXd Simulation::constraintJacobian(const Configuration& q, const Vec
   return J;
 }
 
+// Phi_q v + Phi_t at the current state (zero when the velocities meet the
+// constraints); Phi_t by central differences in time.
+VectorXd Simulation::velocityConstraints() {
+  const int n = system_.velocityCount(), m = system_.constraintCount();
+  auto constraints = [&](double t) {
+    VectorXd r, phi;
+    system_.residual(t, state_.q, state_.v, VectorXd::Zero(n), VectorXd::Zero(m), r, phi);
+    return phi;
+  };
+  const double dt = 1e-6 * std::max(1.0, std::abs(state_.t));
+  const VectorXd phiRate = (constraints(state_.t + dt) - constraints(state_.t - dt)) / (2 * dt);
+  return constraintJacobian(state_.q, state_.v) * state_.v + phiRate;
+}
+
 // The owners of constraint rows, each named once: "cut joint 'a', drive of
 // joint 'b' and 3 more".
 std::string Simulation::constraintOwners(const std::vector<int>& rows) const {
@@ -130,10 +144,8 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
               std::to_string(std::abs(phi[worst])) + " after projection (is the loop closable?)";
     return false;
   }
-  const double dt = 1e-6 * std::max(1.0, std::abs(state_.t));
-  const VectorXd phiRate = (constraints(state_.q, state_.t + dt) - constraints(state_.q, state_.t - dt)) / (2 * dt);
   const Eigen::MatrixXd J = jacobian(state_.q, state_.v);
-  const VectorXd dv = -leastChange(J, J * state_.v + phiRate);
+  const VectorXd dv = -leastChange(J, velocityConstraints());
   state_.v += dv;
   if (notes) {
     for (const Joint& j : system_.model().joints) {
@@ -151,7 +163,7 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
 
 bool Simulation::initialize(double t0, std::string& message, std::vector<std::string>* notes) {
   state_.t = t0;
-  system_.endStep(t0);
+  system_.startDrives(t0);
   if (!assembleConstraints(message, notes)) return false;
   if (notes && system_.constraintCount() > 0) {
     const std::string redundant = redundantConstraints(state_.q, state_.v, true);
@@ -183,7 +195,15 @@ AdvanceResult Simulation::doStep(double H) {
   // restart generalized-alpha there (a = vdot of the new inputs), or its
   // algorithmic acceleration would carry the old input into the step (an
   // O(h) error that does not go away).
+  IntegratorState start = state_;
   if (inputsChangedSinceStep_ && scene_.analysis == Analysis::Dynamic) {
+    // A drive's rate input that jumped makes the velocities jump, by the
+    // impulse that meets the velocity constraints again.
+    if (system_.constraintCount() > 0) {
+      const VectorXd violation = velocityConstraints();
+      if (violation.cwiseAbs().maxCoeff() > scene_.solver.tolerance)
+        TimeStepper::jumpVelocities(system_, state_, violation);
+    }
     IntegratorState restart = state_;
     std::string message;
     if (stepper_->initialize(system_, restart, message)) {
@@ -192,7 +212,6 @@ AdvanceResult Simulation::doStep(double H) {
       state_.lambda = restart.lambda;
     }
   }
-  IntegratorState start = state_;
   AdvanceResult result = stepper_->advance(system_, state_, state_.t + H);
   if (!result.ok) {
     // Where the substeps gave up, say which constraints were redundant:
@@ -247,7 +266,8 @@ double Simulation::read(const Quantity& q) {
     case QuantityKind::StepSizeMax:
     case QuantityKind::SpectralRadius: return sceneParameter(scene_, q);
     case QuantityKind::JointDamping: return model.joints[jointIndex_[q.index]].damping;
-    case QuantityKind::JointForceInput: {
+    case QuantityKind::JointForceInput:
+    case QuantityKind::JointDriveRate: {
       const Joint& j = model.joints[jointIndex_[q.index]];
       return system_.jointInputs()[j.inputOffset + q.component];
     }
@@ -339,7 +359,8 @@ bool Simulation::write(const Quantity& q, double value) {
       model.joints[jointIndex_[q.index]].damping = value;
       inputsChangedSinceStep_ = true;
       break;
-    case QuantityKind::JointForceInput: {
+    case QuantityKind::JointForceInput:
+    case QuantityKind::JointDriveRate: {
       const Joint& j = model.joints[jointIndex_[q.index]];
       setInput(system_.jointInputs()[j.inputOffset + q.component], value);
       break;

@@ -17,6 +17,7 @@ enum class QuantityKind {
   SpectralRadius,   //                                           (fixed)
   JointDamping,     // index: joint                              (tunable)
   JointForceInput,  // index: joint, component: DOF              (input)
+  JointDriveRate,   // index: joint; rate of a rate-input drive  (input)
   JointCoordinate,  // index: joint, component: DOF              (output)
   JointRate,
   JointReactionForce,   // component 0..2, child marker frame
@@ -75,6 +76,7 @@ class Simulation {
   std::string constraintOwner(int row) const;
   std::string constraintOwners(const std::vector<int>& rows) const;
   Eigen::MatrixXd constraintJacobian(const Configuration& q, const VectorXd& v);
+  VectorXd velocityConstraints();
   std::string redundantConstraints(const Configuration& q, const VectorXd& v, bool vanishing);
   double readFlexible(const Quantity& q);
   void setInput(double& slot, double value);

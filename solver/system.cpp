@@ -16,7 +16,23 @@ System::System(Model model)
       jointInputs_(VectorXd::Zero(model_.jointInputCount)),
       flexibleInputs_(VectorXd::Zero(model_.flexible.inputCount)),
       forceInputs_(VectorXd::Zero(model_.forceInputCount)) {
+  startDrives(0.0);
+}
+
+void System::startDrives(double t0) {
   drives_.startAngle.assign(model_.flexible.drives.size(), 0.0);
+  drives_.stepStart = t0;
+  jointDriveStepStart_ = t0;
+  jointDriveStart_.assign(model_.joints.size(), 0.0);
+  for (std::size_t k = 0; k < model_.joints.size(); ++k) {
+    const Joint& j = model_.joints[k];
+    if (j.driveRateInput) jointDriveStart_[k] = model_.initialConfiguration.scalars[j.scalarOffset];
+  }
+}
+
+double System::driveCoordinate(const Joint& joint, double t) const {
+  if (!joint.driveRateInput) return joint.drive(t);
+  return jointDriveStart_[&joint - model_.joints.data()] + jointInputs_[joint.inputOffset] * (t - jointDriveStepStart_);
 }
 
 void System::retract(Configuration& q, const VectorXd& dq) const { mfbd::retract(model_.blocks, q, dq); }
@@ -25,6 +41,9 @@ void System::endStep(double t) {
   for (std::size_t d = 0; d < drives_.startAngle.size(); ++d)
     drives_.startAngle[d] = drives_.angle(model_.flexible, flexibleInputs_, int(d), t);
   drives_.stepStart = t;
+  for (std::size_t k = 0; k < model_.joints.size(); ++k)
+    if (model_.joints[k].driveRateInput) jointDriveStart_[k] = driveCoordinate(model_.joints[k], t);
+  jointDriveStepStart_ = t;
 }
 
 // tau = actuator inputs - viscous joint damping - rotational springs, along each joint's DOFs.
@@ -96,7 +115,7 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
   // Drives: coordinate - drive(t) = 0; the multiplier acts along the DOF.
   for (const Joint& j : model_.joints) {
     if (!j.driven) continue;
-    phi[j.constraintOffset] = q.scalars[j.scalarOffset] - j.drive(t);
+    phi[j.constraintOffset] = q.scalars[j.scalarOffset] - driveCoordinate(j, t);
     if (lambda.size() > 0) r[j.velocityOffset] += lambda[j.constraintOffset];
   }
 }
@@ -183,7 +202,8 @@ VectorXd System::constraintAccelerationTerm(double t, const Configuration& q, co
   VectorXd gamma = VectorXd::Zero(model_.constraintCount);
   forwardKinematics(model_, data_, q, v, VectorXd::Zero(model_.velocityCount));
   for (const Joint& j : model_.joints) {
-    if (j.driven) gamma[j.constraintOffset] = -j.drive.acceleration(t);
+    // A rate input is held over the step: no acceleration.
+    if (j.driven && !j.driveRateInput) gamma[j.constraintOffset] = -j.drive.acceleration(t);
     if (!j.cut) continue;
     const int parent = j.parentMarker.body, child = j.childMarker.body;
     const JointConstraint jc = constraintOf(j);
