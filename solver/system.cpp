@@ -144,7 +144,7 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
                           Triplets& constraintJacobian) {
   const int n = model_.rigidVelocityCount;
   forwardKinematics(model_, data_, q, v, vdot);
-  computeVelocityTransformation(model_, data_);
+  if (model_.constraintCount > 0) computeVelocityTransformation(model_, data_);
   Eigen::MatrixXd S = cM * jointSpaceMassMatrix(model_, data_);
   // Constraint rows Phi_q = Phi_Z B (dense over the joint rates: a stable pattern).
   const Eigen::MatrixXd& B = data_.velocityTransformation;
