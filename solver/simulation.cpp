@@ -198,8 +198,10 @@ AdvanceResult Simulation::doStep(double H) {
   IntegratorState start = state_;
   if (inputsChangedSinceStep_ && scene_.analysis == Analysis::Dynamic) {
     // A drive's rate input that jumped makes the velocities jump, by the
-    // impulse that meets the velocity constraints again.
-    if (system_.constraintCount() > 0) {
+    // impulse that meets the velocity constraints again. (Only then: index-3
+    // generalized-alpha meets them only to O(h^2), and a projection at every
+    // change of a force input would alter the motion.)
+    if (driveRateChanged_) {
       const VectorXd violation = velocityConstraints();
       if (violation.cwiseAbs().maxCoeff() > scene_.solver.tolerance)
         TimeStepper::jumpVelocities(system_, state_, violation);
@@ -226,6 +228,7 @@ AdvanceResult Simulation::doStep(double H) {
   }
   system_.endStep(state_.t);
   inputsChangedSinceStep_ = false;
+  driveRateChanged_ = false;
   outputsCurrent_ = false;
   evaluateOutputs(false);
   updateQuaternions(false);
@@ -362,7 +365,9 @@ bool Simulation::write(const Quantity& q, double value) {
     case QuantityKind::JointForceInput:
     case QuantityKind::JointDriveRate: {
       const Joint& j = model.joints[jointIndex_[q.index]];
-      setInput(system_.jointInputs()[j.inputOffset + q.component], value);
+      double& slot = system_.jointInputs()[j.inputOffset + q.component];
+      if (q.kind == QuantityKind::JointDriveRate && slot != value) driveRateChanged_ = true;
+      setInput(slot, value);
       break;
     }
     case QuantityKind::ForceInput: setInput(system_.forceInputs()[q.index], value); break;

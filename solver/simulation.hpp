@@ -91,6 +91,7 @@ class Simulation {
   bool outputsCurrent_ = false;
   bool reactionsCurrent_ = false;  // the evaluated outputs include consistent reactions
   bool inputsChangedSinceStep_ = false;
+  bool driveRateChanged_ = false;  // a rate-input drive's rate, since the last step
 };
 
 }  // namespace mfbd
