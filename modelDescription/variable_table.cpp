@@ -91,9 +91,16 @@ std::vector<Variable> variableTable(const Scene& scene) {
           "stiffness-proportional material damping coefficient", {QK::FlexibleDamping, b},
           scene.flexibleBodies[b].damping);
 
-  // Inputs: generalized joint forces along the DOFs of actuated joints.
+  // Inputs: generalized joint forces along the DOFs of actuated joints, and
+  // the rates of rate-input drives.
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
+    if (jt.driveRateInput) {
+      const bool angular = isAngle(jointCoordinateNames(jt.type)[0]);
+      t.add(jt.name + ".drive_rate", Causality::Input, Variability::Continuous, angular ? "rad/s" : "m/s",
+            "rate of the driven coordinate, held over a step (the coordinate integrates it)",
+            {QK::JointDriveRate, j}, 0.0);
+    }
     if (!jt.torqueInput) continue;
     const auto names = jointCoordinateNames(jt.type);
     for (int d = 0; d < int(names.size()); ++d) {

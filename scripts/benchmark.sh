@@ -16,3 +16,5 @@ done
 .venv/bin/python benchmarks/peer_summary.py --out "$out"
 # Per-step cost of the flexible mesh against element count (C++ driver, built here).
 .venv/bin/python benchmarks/flexible_cost.py --out "$out"
+# Per-step cost of a rigid pendulum chain against the number of bodies (C++ driver, built here).
+.venv/bin/python benchmarks/chain_cost.py --out "$out"

@@ -1,7 +1,10 @@
 #include "simulation.hpp"
 
+#include <algorithm>
+
 #include "coupling/joint_constraint.hpp"
 #include "flex/flexible_energy.hpp"
+#include "integrator/constraint_rank.hpp"
 #include "integrator/generalized_alpha.hpp"
 #include "integrator/static_equilibrium.hpp"
 #include "rigid/force_elements.hpp"
@@ -55,6 +58,65 @@ std::string Simulation::constraintOwner(int row) const {
   return "constraint row " + std::to_string(row);
 }
 
+Eigen::MatrixXd Simulation::constraintJacobian(const Configuration& q, const VectorXd& v) {
+  const int n = system_.velocityCount(), m = system_.constraintCount();
+  Triplets S, G;
+  system_.tangent(state_.t, q, v, VectorXd::Zero(n), VectorXd::Zero(m), 0.0, 0.0, 0.0, S, G);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, n);
+  for (const auto& e : G) J(e.row(), e.col()) += e.value();
+  return J;
+}
+
+// Phi_q v + Phi_t at the current state (zero when the velocities meet the
+// constraints); Phi_t by central differences in time.
+VectorXd Simulation::velocityConstraints() {
+  const int n = system_.velocityCount(), m = system_.constraintCount();
+  auto constraints = [&](double t) {
+    VectorXd r, phi;
+    system_.residual(t, state_.q, state_.v, VectorXd::Zero(n), VectorXd::Zero(m), r, phi);
+    return phi;
+  };
+  const double dt = 1e-6 * std::max(1.0, std::abs(state_.t));
+  const VectorXd phiRate = (constraints(state_.t + dt) - constraints(state_.t - dt)) / (2 * dt);
+  return constraintJacobian(state_.q, state_.v) * state_.v + phiRate;
+}
+
+// The owners of constraint rows, each named once: "cut joint 'a', drive of
+// joint 'b' and 3 more".
+std::string Simulation::constraintOwners(const std::vector<int>& rows) const {
+  std::vector<std::string> names;
+  for (int row : rows) {
+    const std::string name = constraintOwner(row);
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+  }
+  std::string text;
+  const std::size_t shown = std::min<std::size_t>(names.size(), 3);
+  for (std::size_t i = 0; i < shown; ++i) text += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+  if (names.size() > shown) text += " and " + std::to_string(names.size() - shown) + " more";
+  return text;
+}
+
+// Redundant constraint rows at (q, v), in joint names: rows that constrain
+// nothing there (`vanishing`: a planar loop in 3-D) and rows that are
+// combinations of others (Bricard; two drives of one motion).
+std::string Simulation::redundantConstraints(const Configuration& q, const VectorXd& v, bool vanishing) {
+  const ConstraintRank rank = constraintRank(constraintJacobian(q, v));
+  std::string text;
+  if (vanishing && !rank.vanishingRows.empty())
+    text += std::to_string(rank.vanishingRows.size()) + " rows constrain nothing here (of " +
+            constraintOwners(rank.vanishingRows) + ")";
+  for (const std::vector<int>& set : rank.dependentRows) {
+    if (!text.empty()) text += "; ";
+    text += "a row of " + constraintOwner(set.front()) + " depends on " +
+            constraintOwners(std::vector<int>(set.begin() + 1, set.end()));
+    if (&set - rank.dependentRows.data() == 2 && rank.dependentRows.size() > 3) {
+      text += "; " + std::to_string(rank.dependentRows.size() - 3) + " more dependent rows";
+      break;
+    }
+  }
+  return text;
+}
+
 // Least-change projection: q <- q o exp(-J^T (J J^T)^-1 Phi) until Phi = 0,
 // then v <- v - J^T (J J^T)^-1 (J v + Phi_t). J J^T gets a tiny ridge so
 // redundant rows (a planar loop in 3D) do not make it singular.
@@ -62,13 +124,7 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
   const int n = system_.velocityCount(), m = system_.constraintCount();
   if (m == 0) return true;
   const double tol = scene_.solver.tolerance;
-  auto jacobian = [&](const Configuration& q, const VectorXd& v) {
-    Triplets S, G;
-    system_.tangent(state_.t, q, v, VectorXd::Zero(n), VectorXd::Zero(m), 0.0, 0.0, 0.0, S, G);
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, n);
-    for (const auto& e : G) J(e.row(), e.col()) += e.value();
-    return J;
-  };
+  auto jacobian = [&](const Configuration& q, const VectorXd& v) { return constraintJacobian(q, v); };
   auto constraints = [&](const Configuration& q, double t) {
     VectorXd r, phi;
     system_.residual(t, q, state_.v, VectorXd::Zero(n), VectorXd::Zero(m), r, phi);
@@ -91,10 +147,8 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
               std::to_string(std::abs(phi[worst])) + " after projection (is the loop closable?)";
     return false;
   }
-  const double dt = 1e-6 * std::max(1.0, std::abs(state_.t));
-  const VectorXd phiRate = (constraints(state_.q, state_.t + dt) - constraints(state_.q, state_.t - dt)) / (2 * dt);
   const Eigen::MatrixXd J = jacobian(state_.q, state_.v);
-  const VectorXd dv = -leastChange(J, J * state_.v + phiRate);
+  const VectorXd dv = -leastChange(J, velocityConstraints());
   state_.v += dv;
   if (notes) {
     for (const Joint& j : system_.model().joints) {
@@ -112,11 +166,16 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
 
 bool Simulation::initialize(double t0, std::string& message, std::vector<std::string>* notes) {
   state_.t = t0;
-  system_.endStep(t0);
+  system_.startDrives(t0);
   if (!assembleConstraints(message, notes)) return false;
+  if (notes && system_.constraintCount() > 0) {
+    const std::string redundant = redundantConstraints(state_.q, state_.v, true);
+    if (!redundant.empty())
+      notes->push_back("redundant constraints at the start (regularised in the solve): " + redundant);
+  }
   if (!stepper_->initialize(system_, state_, message)) return false;
   outputsCurrent_ = false;
-  evaluateOutputs();
+  evaluateOutputs(false);
   updateQuaternions(true);
   return true;
 }
@@ -142,33 +201,52 @@ AdvanceResult Simulation::doStep(double H) {
   // restart generalized-alpha there, or its algorithmic acceleration would
   // carry the old input into the step (an O(h) error that does not go away).
   if (inputsChangedSinceStep_ && scene_.analysis == Analysis::Dynamic) {
+    // A drive's rate input that jumped makes the velocities jump, by the
+    // impulse that meets the velocity constraints again. (Only then: index-3
+    // generalized-alpha meets them only to O(h^2), and a projection at every
+    // change of a force input would alter the motion.)
+    if (driveRateChanged_) {
+      const VectorXd violation = velocityConstraints();
+      if (violation.cwiseAbs().maxCoeff() > scene_.solver.tolerance)
+        TimeStepper::jumpVelocities(system_, state_, violation);
+    }
     std::string message;
     stepper_->restartAfterInputJump(system_, state_, message);
   }
   AdvanceResult result = stepper_->advance(system_, state_, state_.t + H);
   if (!result.ok) {
+    // Where the substeps gave up, say which constraints were redundant:
+    // rows that the motion cannot meet together are the usual cause.
+    if (system_.constraintCount() > 0) {
+      const std::string redundant = redundantConstraints(state_.q, state_.v, false);
+      if (!redundant.empty()) result.message += "; redundant constraints there: " + redundant;
+    }
     state_ = std::move(start);
     outputsCurrent_ = false;  // the workspace holds the failed trial, not the restored state
     return result;
   }
   system_.endStep(state_.t);
   inputsChangedSinceStep_ = false;
+  driveRateChanged_ = false;
   outputsCurrent_ = false;
-  evaluateOutputs();
+  evaluateOutputs(false);
   updateQuaternions(false);
   return result;
 }
 
-// Outputs of the state at the current time. Accelerations and multipliers
-// (so the reactions) are solved consistently for the state (q, v) when
-// there are constraints (index-3 generalized-alpha satisfies them only at
-// position level) or when inputs changed after the step; the integrator's
-// own history is left untouched.
-void Simulation::evaluateOutputs() {
-  if (outputsCurrent_) return;
+// Outputs of the state at the current time. Positions and velocities need
+// only the kinematics. Accelerations and multipliers, so the reactions and
+// drive forces, are solved consistently for the state (q, v) when one of
+// those is read and there are constraints (index-3 generalized-alpha
+// satisfies them only at position level) or inputs changed after the step;
+// the integrator's own history is left untouched. That solve is a
+// factorization of its own: a master that reads no reactions skips it.
+void Simulation::evaluateOutputs(bool reactions) {
+  if (outputsCurrent_ && (reactionsCurrent_ || !reactions)) return;
   VectorXd vdot = state_.vdot, lambda = state_.lambda;
-  const bool constrained = system_.constraintCount() > 0;
-  if ((inputsChangedSinceStep_ || constrained) && scene_.analysis == Analysis::Dynamic) {
+  const bool consistentSolve = (inputsChangedSinceStep_ || system_.constraintCount() > 0) &&
+                               scene_.analysis == Analysis::Dynamic;
+  if (reactions && consistentSolve) {
     IntegratorState probe = state_;
     std::string message;
     if (stepper_->initialize(system_, probe, message)) {
@@ -179,6 +257,7 @@ void Simulation::evaluateOutputs() {
   system_.evaluate(state_.t, state_.q, state_.v, vdot, lambda);
   outputLambda_ = lambda;
   outputsCurrent_ = true;
+  reactionsCurrent_ = reactions || !consistentSolve;
 }
 
 double Simulation::read(const Quantity& q) {
@@ -189,7 +268,8 @@ double Simulation::read(const Quantity& q) {
     case QuantityKind::StepSizeMax:
     case QuantityKind::SpectralRadius: return sceneParameter(scene_, q);
     case QuantityKind::JointDamping: return model.joints[jointIndex_[q.index]].damping;
-    case QuantityKind::JointForceInput: {
+    case QuantityKind::JointForceInput:
+    case QuantityKind::JointDriveRate: {
       const Joint& j = model.joints[jointIndex_[q.index]];
       return system_.jointInputs()[j.inputOffset + q.component];
     }
@@ -201,7 +281,11 @@ double Simulation::read(const Quantity& q) {
     }
     default: break;
   }
-  evaluateOutputs();
+  // Quantities of the multipliers or accelerations (with consistent element
+  // mass, section forces include the element's inertia).
+  evaluateOutputs(q.kind == QuantityKind::JointReactionForce || q.kind == QuantityKind::JointReactionTorque ||
+                  q.kind == QuantityKind::JointDriveForce || q.kind == QuantityKind::FlexibleBodyJointForce ||
+                  q.kind == QuantityKind::FlexibleBodyJointTorque || q.kind == QuantityKind::ElementSectionForce);
   if (q.kind >= QuantityKind::NodePosition) return readFlexible(q);
   const Data& data = system_.data();
   if (q.kind == QuantityKind::SpringLength) {
@@ -292,9 +376,12 @@ bool Simulation::write(const Quantity& q, double value) {
       model.joints[jointIndex_[q.index]].damping = value;
       inputsChangedSinceStep_ = true;
       break;
-    case QuantityKind::JointForceInput: {
+    case QuantityKind::JointForceInput:
+    case QuantityKind::JointDriveRate: {
       const Joint& j = model.joints[jointIndex_[q.index]];
-      setInput(system_.jointInputs()[j.inputOffset + q.component], value);
+      double& slot = system_.jointInputs()[j.inputOffset + q.component];
+      if (q.kind == QuantityKind::JointDriveRate && slot != value) driveRateChanged_ = true;
+      setInput(slot, value);
       break;
     }
     case QuantityKind::ForceInput: setInput(system_.forceInputs()[q.index], value); break;

@@ -17,6 +17,7 @@ enum class QuantityKind {
   SpectralRadius,   //                                           (fixed)
   JointDamping,     // index: joint                              (tunable)
   JointForceInput,  // index: joint, component: DOF              (input)
+  JointDriveRate,   // index: joint; rate of a rate-input drive  (input)
   JointCoordinate,  // index: joint, component: DOF              (output)
   JointRate,
   JointReactionForce,   // component 0..2, child marker frame
@@ -72,11 +73,15 @@ class Simulation {
   bool write(const Quantity& q, double value);
 
  private:
-  void evaluateOutputs();
+  void evaluateOutputs(bool reactions);
 
   void updateQuaternions(bool reset);
   bool assembleConstraints(std::string& message, std::vector<std::string>* notes);
   std::string constraintOwner(int row) const;
+  std::string constraintOwners(const std::vector<int>& rows) const;
+  Eigen::MatrixXd constraintJacobian(const Configuration& q, const VectorXd& v);
+  VectorXd velocityConstraints();
+  std::string redundantConstraints(const Configuration& q, const VectorXd& v, bool vanishing);
   double readFlexible(const Quantity& q);
   void setInput(double& slot, double value);
 
@@ -88,7 +93,9 @@ class Simulation {
   std::vector<Quat> orientation_;            // sign-continuous across steps: scene bodies, then mesh nodes
   VectorXd outputLambda_;  // multipliers of the evaluated outputs
   bool outputsCurrent_ = false;
+  bool reactionsCurrent_ = false;  // the evaluated outputs include consistent reactions
   bool inputsChangedSinceStep_ = false;
+  bool driveRateChanged_ = false;  // a rate-input drive's rate, since the last step
 };
 
 }  // namespace mfbd

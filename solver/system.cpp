@@ -1,5 +1,7 @@
 #include "system.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "coupling/joint_constraint.hpp"
@@ -14,7 +16,23 @@ System::System(Model model)
       jointInputs_(VectorXd::Zero(model_.jointInputCount)),
       flexibleInputs_(VectorXd::Zero(model_.flexible.inputCount)),
       forceInputs_(VectorXd::Zero(model_.forceInputCount)) {
+  startDrives(0.0);
+}
+
+void System::startDrives(double t0) {
   drives_.startAngle.assign(model_.flexible.drives.size(), 0.0);
+  drives_.stepStart = t0;
+  jointDriveStepStart_ = t0;
+  jointDriveStart_.assign(model_.joints.size(), 0.0);
+  for (std::size_t k = 0; k < model_.joints.size(); ++k) {
+    const Joint& j = model_.joints[k];
+    if (j.driveRateInput) jointDriveStart_[k] = model_.initialConfiguration.scalars[j.scalarOffset];
+  }
+}
+
+double System::driveCoordinate(const Joint& joint, double t) const {
+  if (!joint.driveRateInput) return joint.drive(t);
+  return jointDriveStart_[&joint - model_.joints.data()] + jointInputs_[joint.inputOffset] * (t - jointDriveStepStart_);
 }
 
 void System::retract(Configuration& q, const VectorXd& dq) const { mfbd::retract(model_.blocks, q, dq); }
@@ -23,6 +41,9 @@ void System::endStep(double t) {
   for (std::size_t d = 0; d < drives_.startAngle.size(); ++d)
     drives_.startAngle[d] = drives_.angle(model_.flexible, flexibleInputs_, int(d), t);
   drives_.stepStart = t;
+  for (std::size_t k = 0; k < model_.joints.size(); ++k)
+    if (model_.joints[k].driveRateInput) jointDriveStart_[k] = driveCoordinate(model_.joints[k], t);
+  jointDriveStepStart_ = t;
 }
 
 // tau = actuator inputs - viscous joint damping - rotational springs, along each joint's DOFs.
@@ -67,9 +88,14 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
   }
   applyForceElements(model_.forces, forceInputs_, data_);
   phi.setZero(model_.constraintCount);
+  constraintLengthScale_ = 1.0;
   for (const Joint& j : model_.joints) {
+    if (j.driven) constraintLengthScale_ = std::max(constraintLengthScale_, std::abs(q.scalars[j.scalarOffset]));
     if (!j.cut) continue;
     const int parent = j.parentMarker.body, child = j.childMarker.body;
+    const double reach = std::max(poseOf(data_, parent).r.norm() + j.parentMarker.position.norm(),
+                                  poseOf(data_, child).r.norm() + j.childMarker.position.norm());
+    constraintLengthScale_ = std::max(constraintLengthScale_, reach);
     const ConstraintEvaluation c = evaluateJointConstraint(constraintOf(j), poseOf(data_, parent), poseOf(data_, child));
     const int m = int(c.phi.size());
     phi.segment(j.constraintOffset, m) = c.phi;
@@ -87,7 +113,10 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
   // Flexible body joints: rows, and their forces on the virtual bodies (the
   // node side is added in residual(); nodes_ is current).
   for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
-    const ConstraintEvaluation c = evaluateJointConstraint(w.weld, poseOfNode(nodes_[w.node]), poseOf(data_, w.virtualBody));
+    const BodyPose node = poseOfNode(nodes_[w.node]), body = poseOf(data_, w.virtualBody);
+    constraintLengthScale_ =
+        std::max({constraintLengthScale_, node.r.norm() + w.weld.parentMarker.position.norm(), body.r.norm()});
+    const ConstraintEvaluation c = evaluateJointConstraint(w.weld, node, body);
     phi.segment<6>(w.constraintOffset) = c.phi;
     if (lambda.size() == 0) continue;
     const Vec6 onBody = -c.jacobianChild.transpose() * lambda.segment<6>(w.constraintOffset);
@@ -99,7 +128,7 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
   // Drives: coordinate - drive(t) = 0; the multiplier acts along the DOF.
   for (const Joint& j : model_.joints) {
     if (!j.driven) continue;
-    phi[j.constraintOffset] = q.scalars[j.scalarOffset] - j.drive(t);
+    phi[j.constraintOffset] = q.scalars[j.scalarOffset] - driveCoordinate(j, t);
     if (lambda.size() > 0) r[j.velocityOffset] += lambda[j.constraintOffset];
   }
 }
@@ -142,7 +171,7 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
                           Triplets& constraintJacobian) {
   const int n = model_.rigidVelocityCount;
   forwardKinematics(model_, data_, q, v, vdot);
-  computeVelocityTransformation(model_, data_);
+  if (model_.constraintCount > 0) computeVelocityTransformation(model_, data_);
   Eigen::MatrixXd S = cM * jointSpaceMassMatrix(model_, data_);
   // Constraint rows Phi_q = Phi_Z B (dense over the joint rates: a stable pattern).
   const Eigen::MatrixXd& B = data_.velocityTransformation;
@@ -248,7 +277,8 @@ VectorXd System::constraintAccelerationTerm(double t, const Configuration& q, co
   VectorXd gamma = VectorXd::Zero(model_.constraintCount);
   forwardKinematics(model_, data_, q, v, VectorXd::Zero(model_.velocityCount));
   for (const Joint& j : model_.joints) {
-    if (j.driven) gamma[j.constraintOffset] = -j.drive.acceleration(t);
+    // A rate input is held over the step: no acceleration.
+    if (j.driven && !j.driveRateInput) gamma[j.constraintOffset] = -j.drive.acceleration(t);
     if (!j.cut) continue;
     const int parent = j.parentMarker.body, child = j.childMarker.body;
     const JointConstraint jc = constraintOf(j);

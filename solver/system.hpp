@@ -30,7 +30,11 @@ class System : public Dynamics {
   // Rate-input drives integrate their angle; fold it in at each step end.
   const DriveState& driveState() const { return drives_; }
   void setDriveState(const DriveState& d) { drives_ = d; }
+  void startDrives(double t0);  // the first step starts at t0 from the initial coordinates
   void endStep(double t);
+  // The coordinate a joint drive prescribes at t: drive(t), or for a rate
+  // input the coordinate at the step start plus rate (t - step start).
+  double driveCoordinate(const Joint& joint, double t) const;
 
   int velocityCount() const override { return model_.velocityCount; }
   int constraintCount() const override { return model_.constraintCount; }
@@ -40,6 +44,7 @@ class System : public Dynamics {
   void tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian) override;
   VectorXd constraintAccelerationTerm(double t, const Configuration& q, const VectorXd& v) override;
+  double constraintLengthScale() const override { return constraintLengthScale_; }
 
   // Force and torque a cut joint passes to its child (child marker frame,
   // about its origin), from the multipliers (after evaluate()).
@@ -67,8 +72,11 @@ class System : public Dynamics {
   Data data_;
   VectorXd jointInputs_, flexibleInputs_, forceInputs_;
   DriveState drives_;
+  std::vector<double> jointDriveStart_;  // per joint: a rate-input drive's coordinate at the step start
+  double jointDriveStepStart_ = 0.0;
   std::vector<NodeState> nodes_;
   VectorXd tau_, rigid_;
+  double constraintLengthScale_ = 1.0;  // of the last residual
 };
 
 }  // namespace mfbd

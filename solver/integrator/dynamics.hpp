@@ -30,6 +30,10 @@ class Dynamics {
   virtual void tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                        const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                        Triplets& constraintJacobian) = 0;
+  // Size of the world positions (m) the constraint rows of the last residual
+  // were computed from: their round-off is a few ulps of it, which no Newton
+  // correction can remove (a 40 m long chain of bodies: ~1e-14 m).
+  virtual double constraintLengthScale() const { return 1.0; }
 };
 
 }  // namespace mfbd

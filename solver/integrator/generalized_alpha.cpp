@@ -101,7 +101,27 @@ bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial,
     solver_.analyzePattern(assembledIterationMatrix());
   if (solver_.factorize(assembledIterationMatrix()) != LinearSolver::Status::Ok) return false;
   factoredStep_ = h;
+  correctionNoise_ = constraintNoise(system, system.velocityCount(), system.constraintCount());
   return true;
+}
+
+// The correction that the round-off of the constraint rows alone produces
+// through the factorised matrix: Newton corrections of that size are noise,
+// not progress. It grows with the matrix's conditioning, e.g. as a
+// closed-loop mechanism nears a singular configuration, where a fixed
+// floor would reject converged steps. Estimated by one solve with a
+// pseudo-random sign pattern of the rows' round-off level.
+double GeneralizedAlpha::constraintNoise(const Dynamics& system, int n, int m) const {
+  if (m == 0) return 0.0;
+  const double level = 16.0 * std::numeric_limits<double>::epsilon() * system.constraintLengthScale();
+  VectorXd rhs = VectorXd::Zero(n + m);
+  unsigned pattern = 12345u;
+  for (int i = 0; i < m; ++i) {
+    pattern = pattern * 1103515245u + 12345u;
+    rhs[n + i] = (pattern >> 16) & 1u ? level : -level;
+  }
+  const double noise = solver_.solve(rhs).head(n).cwiseAbs().maxCoeff();
+  return std::isfinite(noise) ? noise : 0.0;
 }
 
 bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
@@ -121,8 +141,9 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
 
   VectorXd r, phi, rhs(n + m);
   double previous = 0.0;
-  // Corrections cannot resolve below a few ulps of the coordinates.
-  const double roundOffFloor =
+  // Corrections cannot resolve below a few ulps of the coordinates, nor
+  // below the noise the constraints' round-off makes (constraintNoise).
+  const double coordinateFloor =
       256.0 * std::numeric_limits<double>::epsilon() *
       std::max(1.0, s.q.scalars.size() ? s.q.scalars.cwiseAbs().maxCoeff() : 0.0);
   for (int k = 0; k < options_.maxIterations; ++k) {
@@ -141,6 +162,8 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
       }
       ++s.factorizations;
     }
+    // The constraints are met to the tolerance or to their round-off.
+    const double phiFloor = 64.0 * std::numeric_limits<double>::epsilon() * system.constraintLengthScale();
     rhs << -r / betaPrime, -phi;
     const VectorXd delta = solver_.solve(rhs);
     ++s.newtonIterations;
@@ -164,9 +187,9 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     // rho is noise: converged too.
     const double rho = k > 0 ? size / previous : 1.0;
     const double remaining = rho < 1.0 ? rho / (1.0 - rho) * size : HUGE_VAL;
-    const double floor = std::max(0.01 * options_.tolerance, roundOffFloor);
+    const double floor = std::max({0.01 * options_.tolerance, coordinateFloor, 4.0 * correctionNoise_});
     const bool small = size <= floor || (size <= options_.tolerance && remaining <= options_.tolerance);
-    if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= options_.tolerance)) {
+    if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= std::max(options_.tolerance, phiFloor))) {
       trial.substeps = s.substeps + 1;
       trial.newtonIterations = s.newtonIterations;
       trial.factorizations = s.factorizations;

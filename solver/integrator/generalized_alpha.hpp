@@ -37,10 +37,12 @@ class GeneralizedAlpha : public TimeStepper {
     double cM, cC, cK;
   };
   MatrixFactors matrixFactors(double h) const;
+  double constraintNoise(const Dynamics& system, int n, int m) const;
 
   double alphaM_, alphaF_, gamma_, beta_;
   LinearSolver solver_;
   double factoredStep_ = 0.0;  // substep size of the current factorization; 0 = none
+  double correctionNoise_ = 0.0;  // of the current factorization (constraintNoise)
 };
 
 }  // namespace mfbd

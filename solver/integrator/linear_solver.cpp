@@ -62,7 +62,11 @@ LinearSolver& LinearSolver::operator=(const LinearSolver& other) {
 bool LinearSolver::usesSparse() const { return impl_->sparse; }
 
 void LinearSolver::analyzePattern(const SparseMatrix& A) {
-  impl_->sparse = A.rows() > kDenseThreshold;
+  // Dense LU also for a matrix that is dense anyway (joint coordinates of a
+  // long closed chain: B^T M B and Phi_q B fill it), where KLU's sparse
+  // kernel is slower.
+  const double size = double(A.rows());
+  impl_->sparse = A.rows() > kDenseThreshold && !(A.rows() <= kDenseMaximum && A.nonZeros() > 0.2 * size * size);
   if (!impl_->sparse) return;
   impl_->klu = std::make_unique<Eigen::KLU<SparseMatrix>>();
   impl_->klu->analyzePattern(A);
@@ -77,10 +81,14 @@ LinearSolver::Status LinearSolver::factorize(const SparseMatrix& A) {
   }
   const Eigen::MatrixXd dense(A);
   impl_->dense.compute(dense);
-  // PartialPivLU does not report singularity: judge by the pivots.
+  // PartialPivLU does not report singularity: judge each pivot against its
+  // own column (row pivoting keeps the columns), since the blocks of an
+  // iteration matrix differ in units: a constraint column's pivot is the
+  // Schur complement |Phi_q|^2/|S| (or the small regularisation of a
+  // dependent row), far below the largest mass entry yet sound.
   const Eigen::VectorXd pivots = impl_->dense.matrixLU().diagonal().cwiseAbs();
-  const double scale = dense.cwiseAbs().maxCoeff();
-  if (!(pivots.minCoeff() > 1e-14 * scale)) return Status::Singular;
+  const Eigen::VectorXd columnScale = dense.cwiseAbs().colwise().maxCoeff().transpose();
+  if (!(pivots.array() > 1e-14 * columnScale.array()).all()) return Status::Singular;
   return Status::Ok;
 }
 

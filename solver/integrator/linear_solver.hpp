@@ -1,6 +1,6 @@
 // Linear solver with the analyze / factorize / solve / status shape: the
 // sparsity pattern is analysed once per topology, then only refactorised.
-// Dense LU below a size threshold, KLU (SuiteSparse) above.
+// Dense LU below a size threshold or for a mostly filled matrix, KLU (SuiteSparse) otherwise.
 #pragma once
 #include <memory>
 #include <vector>
@@ -34,7 +34,8 @@ class SparseAssembly {
 class LinearSolver {
  public:
   enum class Status { Ok, Singular };
-  static constexpr int kDenseThreshold = 60;
+  static constexpr int kDenseThreshold = 60;  // dense LU up to this size
+  static constexpr int kDenseMaximum = 1500;   // and up to this size when more than 20 % filled
 
   LinearSolver();
   ~LinearSolver();

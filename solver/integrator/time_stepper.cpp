@@ -51,6 +51,23 @@ bool TimeStepper::assembleIterationMatrix(Dynamics& system, const IntegratorStat
   return iteration_.assign(system.velocityCount() + system.constraintCount(), iterationTriplets_);
 }
 
+bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const VectorXd& violation) {
+  const int n = system.velocityCount(), m = system.constraintCount();
+  LinearSolver solver;
+  const SparseMatrix A = iterationMatrix(system, state, 1.0, 0.0, 0.0);
+  solver.analyzePattern(A);
+  if (solver.factorize(A) != LinearSolver::Status::Ok) return false;
+  VectorXd rhs = VectorXd::Zero(n + m);
+  rhs.tail(m) = -violation;
+  VectorXd x = solver.solve(rhs);
+  // Refinement against the unregularised matrix meets the constraints exactly.
+  const SparseMatrix exact = iterationMatrix(system, state, 1.0, 0.0, 0.0, false);
+  for (int sweep = 0; sweep < 3; ++sweep) x += solver.solve(rhs - exact * x);
+  if (!x.allFinite()) return false;
+  state.v += x.head(n);
+  return true;
+}
+
 AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double tEnd) {
   AdvanceResult result;
   beginAdvance();

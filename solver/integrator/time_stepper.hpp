@@ -45,6 +45,12 @@ class TimeStepper {
 
   const SolverOptions& options() const { return options_; }
 
+  // The velocity jump that restores violated velocity constraints
+  // Phi_q v + Phi_t = 0 (`violation` is their value): the impulse a drive
+  // whose rate input jumped applies, M dv + Phi_q^T Lambda = 0. False if
+  // the matrix is singular.
+  static bool jumpVelocities(Dynamics& system, IntegratorState& state, const VectorXd& violation);
+
  protected:
   // One substep of size h from s.t; false (with a reason) leaves s unchanged.
   virtual bool substep(Dynamics& system, IntegratorState& s, double h, std::string& why) = 0;

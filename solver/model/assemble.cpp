@@ -67,9 +67,9 @@ void layOutCoordinates(Model& model, Joint& joint, const JointSpec& spec) {
   v.conservativeResize(v.size() + joint.dofs);
   for (int i = 0; i < joint.dofs; ++i) v[joint.velocityOffset + i] = spec.initialRates.empty() ? 0.0 : spec.initialRates[i];
   model.velocityCount += joint.dofs;
-  if (joint.actuated) {
+  if (joint.actuated || spec.driveRateInput) {
     joint.inputOffset = model.jointInputCount;
-    model.jointInputCount += joint.dofs;
+    model.jointInputCount += spec.driveRateInput ? 1 : joint.dofs;
   }
 }
 
@@ -131,6 +131,7 @@ Model assemble(const Scene& scene) {
     if (spec.driven) {
       j.driven = true;
       j.drive = spec.drive;
+      j.driveRateInput = spec.driveRateInput;
       j.constraintOffset = model.constraintCount;
       model.constraintCount += 1;
     }

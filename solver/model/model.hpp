@@ -46,12 +46,13 @@ struct Joint {
   int rotation = -1;       // its stored rotation in Configuration::rotations
   bool cut = false;
   bool actuated = false;   // generalized force input along its DOFs
-  int inputOffset = -1;    // into the joint-force input vector
+  int inputOffset = -1;    // into the joint input vector: forces along its DOFs, or its drive rate
   double damping = 0.0;    // tunable
   int constraintOffset = -1;  // cut joints and drives: first row in Phi (and lambda)
   double springStiffness = 0.0, springDamping = 0.0, springFreeCoordinate = 0.0;  // rotational spring-damper
   bool driven = false;        // coordinate = drive(t), a constraint row (lambda: minus the drive force)
   TimeFunction drive;
+  bool driveRateInput = false;  // drive(t) integrates the rate input at inputOffset (System::driveCoordinate)
 };
 
 // A force element between markers (rigid/force_elements.hpp applies it).

@@ -23,7 +23,8 @@ void computeVelocityTransformation(const Model& model, Data& data);
 // forwardKinematics and with data.applied* filled.
 void backwardNewtonEuler(const Model& model, Data& data, const VectorXd& jointForces, VectorXd& residual);
 
-// Joint-space mass matrix B^T M B (after computeVelocityTransformation).
+// Joint-space mass matrix B^T M B by composite rigid bodies (after
+// forwardKinematics).
 Eigen::MatrixXd jointSpaceMassMatrix(const Model& model, const Data& data);
 
 // Force and torque that joint k's parent exerts on its child, expressed in the

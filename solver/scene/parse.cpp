@@ -159,7 +159,12 @@ JointSpec parseJoint(const Field& f) {
   if (f.has("cut")) jt.cut = f.at("cut").boolean();
   if (f.has("damping")) jt.damping = f.at("damping").nonNegative();
   if (f.has("actuated")) jt.torqueInput = f.at("actuated").boolean();
-  if (f.has("drive")) {
+  if (f.has("drive") && f.at("drive").raw().is_object() && f.at("drive").has("rate_input")) {
+    f.at("drive").expectObject({"rate_input"}, {"rate_input"});
+    jt.driven = true;
+    jt.driveRateInput = f.at("drive").at("rate_input").boolean();
+    if (!jt.driveRateInput) f.at("drive").at("rate_input").fail("expected true (or give the drive as an expression of t)");
+  } else if (f.has("drive")) {  // a function of t: an expression or a table
     jt.driven = true;
     jt.drive = f.at("drive").timeFunction("coordinate");
   }

@@ -73,6 +73,10 @@ struct JointSpec {
   bool torqueInput = false;  // an FMI input acting along the joint's DOFs
   bool driven = false;       // the (single) coordinate follows `drive`(t): a constraint row
   TimeFunction drive;
+  // Driven, with the coordinate's rate from an FMI input <joint>.drive_rate
+  // instead of `drive`: the input is held over a step and the coordinate
+  // integrates it (as a rate-driven support of a flexible node does).
+  bool driveRateInput = false;
   bool isVirtual = false;    // a virtual body's free joint to ground, made by the assembly
 };
 

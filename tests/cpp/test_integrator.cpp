@@ -1,9 +1,12 @@
 // Generalized-alpha on the smallest systems with exact solutions: second-order
-// convergence, the spectral radius at infinity, and step halving.
+// convergence, the spectral radius at infinity, and step halving; the rank
+// of a constraint Jacobian.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
+#include "integrator/constraint_rank.hpp"
 #include "integrator/generalized_alpha.hpp"
 
 using namespace mfbd;
@@ -90,4 +93,26 @@ TEST(GeneralizedAlpha, DampsTheHighestFrequencyByRhoInf) {
   }
   // rho_inf = 0 annihilates the high frequency within a few steps.
   EXPECT_LT(amplitudeAfter(0.0, 4), 1e-6);
+}
+
+TEST(ConstraintRank, FindsVanishingAndDependentRows) {
+  // Row 1 vanishes; row 3 = 5 (row 0 + row 2): rank 2 of four rows.
+  Eigen::MatrixXd J(4, 3);
+  J << 1, 0, 0,  //
+      0, 0, 0,   //
+      0, 1, 0,   //
+      5, 5, 0;
+  ConstraintRank r = constraintRank(J);
+  EXPECT_EQ(r.rank, 2);
+  ASSERT_EQ(r.vanishingRows, std::vector<int>{1});
+  ASSERT_EQ(r.dependentRows.size(), 1u);
+  std::vector<int> set = r.dependentRows[0];
+  std::sort(set.begin(), set.end());
+  EXPECT_EQ(set, (std::vector<int>{0, 2, 3}));
+  // A dependency broken at 1e-6 (relative) is a full rank; at 1e-12 it is not.
+  J(3, 2) = 5e-6;
+  EXPECT_EQ(constraintRank(J).rank, 3);
+  EXPECT_TRUE(constraintRank(J).dependentRows.empty());
+  J(3, 2) = 5e-12;
+  EXPECT_EQ(constraintRank(J).rank, 2);
 }

@@ -1,6 +1,7 @@
 // The recursive kinematics against finite differences: B (Y = B qdot) and
 // Bdot qdot (Ydot at qddot = 0) for a chain through every joint kind, the
-// mass matrix against the residual's dependence on qddot.
+// mass matrix against the residual's dependence on qddot (the chain and a
+// branched tree).
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -118,7 +119,10 @@ TEST_F(RecursiveDynamics, BdotQdotMatchesFiniteDifferences) {
   }
 }
 
-TEST_F(RecursiveDynamics, MassMatrixIsTheResidualsSlopeInAcceleration) {
+namespace {
+
+// M (composite rigid bodies) against the residual, which is linear in qddot.
+void expectMassMatrixIsTheResidualsSlope(const Model& model, const Configuration& q, const VectorXd& v) {
   System system(model);
   const int n = model.velocityCount;
   VectorXd vdot = VectorXd::Random(n), r0, r1, phi;
@@ -134,4 +138,34 @@ TEST_F(RecursiveDynamics, MassMatrixIsTheResidualsSlopeInAcceleration) {
   }
   EXPECT_LT((Md - Md.transpose()).norm(), 1e-12 * Md.norm());
   EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Md).eigenvalues().minCoeff(), 0.0);
+}
+
+// A branched tree: two subtrees on body a, bodies away from the origin.
+const char* kTree = R"({
+  "format": "mfbd-scene/1", "name": "tree", "gravity": [0, 0, -9.81],
+  "bodies": [
+    {"name": "a", "mass": 2.0, "inertia": [0.1, 0.2, 0.25], "position": [3.0, 2.0, 1.0]},
+    {"name": "b", "mass": 1.0, "inertia": [0.1, 0.1, 0.05], "position": [3.5, 2.5, 1.0], "center_of_mass": [0.1, 0, 0]},
+    {"name": "c", "mass": 1.5, "inertia": [0.1, 0.15, 0.2], "position": [2.5, 2.0, 1.5]},
+    {"name": "d", "mass": 0.5, "inertia": [0.02, 0.03, 0.04], "position": [2.5, 1.5, 2.0]}
+  ],
+  "joints": [
+    {"name": "ja", "type": "revolute", "parent": "ground", "child": "a", "position": [3, 2, 0], "axis": [0, 0.3, 1]},
+    {"name": "jb", "type": "spherical", "parent": "a", "child": "b", "position": [3.3, 2.3, 1.0]},
+    {"name": "jc", "type": "prismatic", "parent": "a", "child": "c", "position": [2.8, 2.0, 1.2], "axis": [1, 0, 1]},
+    {"name": "jd", "type": "universal", "parent": "c", "child": "d", "position": [2.5, 1.8, 1.8], "axis": [0, 1, 0]}
+  ]
+})";
+
+}  // namespace
+
+TEST_F(RecursiveDynamics, MassMatrixIsTheResidualsSlopeInAcceleration) {
+  expectMassMatrixIsTheResidualsSlope(model, q, v);
+}
+
+TEST(RecursiveDynamicsTree, MassMatrixIsTheResidualsSlopeInAcceleration) {
+  const Model tree = assemble(parseScene(kTree));
+  Configuration q = tree.initialConfiguration;
+  retract(tree.blocks, q, VectorXd::LinSpaced(tree.velocityCount, -0.7, 0.9));
+  expectMassMatrixIsTheResidualsSlope(tree, q, VectorXd::LinSpaced(tree.velocityCount, 1.5, -0.5));
 }

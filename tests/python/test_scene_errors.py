@@ -146,6 +146,12 @@ CASES = [
     ("joint to itself", edit(set_in(["joints", 0, "parent"], "bob")),
      ["joints[0].child: joint 'hinge' connects a body to itself"]),
     ("wrong format", edit(set_in(["format"], "mfbd-scene/0")), ["format: expected \"mfbd-scene/1\""]),
+    ("drive object without a rate input", edit(lambda s: (s["joints"][0].pop("actuated"),
+                                                          s["joints"][0].update({"drive": {"rate_input": False}}))),
+     ["joints[0].drive.rate_input: expected true (or give the drive as an expression of t)"]),
+    ("rate-input drive on a two-DOF joint", edit(lambda s: (s["joints"][0].pop("actuated"), s["joints"][0].update(
+        {"type": "universal", "initial": {}, "drive": {"rate_input": True}}))),
+     ["joints[0].drive: joint 'hinge': a drive prescribes the coordinate of a one-DOF tree joint"]),
 ]
 
 
