@@ -2,6 +2,7 @@
 
 #include "coupling/joint_constraint.hpp"
 #include "integrator/generalized_alpha.hpp"
+#include "initial_equilibrium.hpp"
 #include "integrator/static_equilibrium.hpp"
 #include "rigid/force_elements.hpp"
 #include "rigid/recursive_dynamics.hpp"
@@ -111,6 +112,18 @@ bool Simulation::initialize(double t0, std::string& message, std::vector<std::st
   state_.t = t0;
   system_.endStep(t0);
   if (!assembleConstraints(message, notes)) return false;
+  if (!stepper_->initialize(system_, state_, message)) return false;
+  outputsCurrent_ = false;
+  evaluateOutputs();
+  updateQuaternions(true);
+  return true;
+}
+
+bool Simulation::startFromEquilibrium(std::string& message, std::vector<std::string>* notes) {
+  if (!scene_.solver.initialEquilibrium || scene_.analysis != Analysis::Dynamic) return true;
+  InitialEquilibriumReport report;
+  if (!solveInitialEquilibrium(system_, state_, scene_.solver, report, message)) return false;
+  if (notes) notes->push_back(report.describe(system_));
   if (!stepper_->initialize(system_, state_, message)) return false;
   outputsCurrent_ = false;
   evaluateOutputs();
