@@ -158,6 +158,8 @@ AdvanceResult Simulation::doStep(double H) {
       state_.lambda = restart.lambda;
     }
   }
+  // Statics: an input that jumped breaks the load path the predictor follows.
+  if (inputsChangedSinceStep_) state_.pathRate.resize(0);
   IntegratorState start = state_;
   AdvanceResult result = stepper_->advance(system_, state_, state_.t + H);
   if (!result.ok) {
