@@ -166,6 +166,14 @@ fmi2Status Instance::exitInitializationMode() {
     state_ = FmuState::Error;
     return fmi2Error;
   }
+  std::string message;
+  std::vector<std::string> notes;
+  if (!simulation_->startFromEquilibrium(message, &notes)) {
+    fail("fmi2ExitInitializationMode", message);
+    state_ = FmuState::Error;
+    return fmi2Error;
+  }
+  for (const std::string& note : notes) log(fmi2OK, "logEvents", note);
   state_ = FmuState::StepComplete;
   return fmi2OK;
 }

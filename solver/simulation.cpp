@@ -6,6 +6,7 @@
 #include "flex/flexible_energy.hpp"
 #include "integrator/constraint_rank.hpp"
 #include "integrator/generalized_alpha.hpp"
+#include "initial_equilibrium.hpp"
 #include "integrator/static_equilibrium.hpp"
 #include "rigid/force_elements.hpp"
 #include "rigid/recursive_dynamics.hpp"
@@ -180,6 +181,18 @@ bool Simulation::initialize(double t0, std::string& message, std::vector<std::st
   return true;
 }
 
+bool Simulation::startFromEquilibrium(std::string& message, std::vector<std::string>* notes) {
+  if (!scene_.solver.initialEquilibrium || scene_.analysis != Analysis::Dynamic) return true;
+  InitialEquilibriumReport report;
+  if (!solveInitialEquilibrium(system_, state_, scene_.solver, report, message)) return false;
+  if (notes) notes->push_back(report.describe(system_));
+  if (!stepper_->initialize(system_, state_, message)) return false;
+  outputsCurrent_ = false;
+  evaluateOutputs(false);
+  updateQuaternions(true);
+  return true;
+}
+
 // Quaternions of bodies and nodes, each sign-continuous with the previous
 // communication point (w >= 0 at the start).
 void Simulation::updateQuaternions(bool reset) {
@@ -196,6 +209,8 @@ void Simulation::updateQuaternions(bool reset) {
 AdvanceResult Simulation::doStep(double H) {
   // The state to come back to if the step fails: before any restart, so a
   // retried step restarts from the same state again.
+  // Statics: an input that jumped breaks the load path the predictor follows.
+  if (inputsChangedSinceStep_) state_.pathRate.resize(0);
   IntegratorState start = state_;
   // An input that jumped at this communication point is a discontinuity:
   // restart generalized-alpha there, or its algorithmic acceleration would

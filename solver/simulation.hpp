@@ -61,6 +61,12 @@ class Simulation {
   // consistent initial accelerations. False with a message naming the joint
   // whose constraint cannot be met; `notes` says what assembly moved.
   bool initialize(double t0, std::string& message, std::vector<std::string>* notes = nullptr);
+  // With the scene's solver.initial_equilibrium (dynamics): moves the state
+  // to the static equilibrium under gravity and loads at the current time,
+  // at rest, and restarts the integrator there; `notes` gets a line with
+  // the iterations and how far nodes moved. Otherwise nothing. Call after
+  // initialize and after setting the inputs (fmi2ExitInitializationMode).
+  bool startFromEquilibrium(std::string& message, std::vector<std::string>* notes = nullptr);
   // Advances to t + H; on failure keeps the state of the step start.
   AdvanceResult doStep(double H);
 

@@ -10,8 +10,10 @@ bool StaticEquilibrium::initialize(Dynamics& system, IntegratorState& state, std
   state.vdot = VectorXd::Zero(n);
   state.a = VectorXd::Zero(n);
   state.lambda = VectorXd::Zero(system.constraintCount());
+  state.pathRate.resize(0);
   if (state.h <= 0.0) state.h = options_.hMax;
-  if (!solve(system, state, message)) {
+  VectorXd increment = VectorXd::Zero(n);
+  if (!solve(system, state, increment, message)) {
     message = "no static equilibrium at the start: " + message;
     return false;
   }
@@ -21,18 +23,25 @@ bool StaticEquilibrium::initialize(Dynamics& system, IntegratorState& state, std
 bool StaticEquilibrium::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
   IntegratorState trial = s;
   trial.t = s.t + h;
-  if (!solve(system, trial, why)) {
+  VectorXd increment = VectorXd::Zero(system.velocityCount());
+  if (s.pathRate.size() == increment.size()) {
+    increment = h * s.pathRate;
+    system.retract(trial.q, increment);
+  }
+  if (!solve(system, trial, increment, why)) {
     s.newtonIterations = trial.newtonIterations;
     s.factorizations = trial.factorizations;
+    s.pathRate.resize(0);  // the retry (halved) starts from the equilibrium itself
     return false;
   }
   ++trial.substeps;
+  trial.pathRate = increment / h;
   s = std::move(trial);
   return true;
 }
 
 // Full Newton: the tangent stiffness is refactorised at every iteration.
-bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, std::string& why) {
+bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, VectorXd& increment, std::string& why) {
   const int n = system.velocityCount(), m = system.constraintCount();
   VectorXd r, phi, rhs(n + m);
   for (int k = 0; k < options_.maxIterations; ++k) {
@@ -41,13 +50,9 @@ bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, std::string&
       why = "residual is not finite";
       return false;
     }
-    const SparseMatrix K = iterationMatrix(system, s, 0.0, 0.0, 1.0);
-    if (patternSize_ != n + m) {
-      solver_.analyzePattern(K);
-      patternSize_ = n + m;
-    }
+    if (assembleIterationMatrix(system, s, 0.0, 0.0, 1.0)) solver_.analyzePattern(assembledIterationMatrix());
     ++s.factorizations;
-    if (solver_.factorize(K) != LinearSolver::Status::Ok) {
+    if (solver_.factorize(assembledIterationMatrix()) != LinearSolver::Status::Ok) {
       why = "singular tangent stiffness (an unsupported rigid-body mode, or a limit point)";
       return false;
     }
@@ -60,6 +65,7 @@ bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, std::string&
       return false;
     }
     system.retract(s.q, delta.head(n));
+    increment += delta.head(n);
     s.lambda += delta.tail(m);
     if (size <= options_.tolerance && (m == 0 || phi.cwiseAbs().maxCoeff() <= options_.tolerance)) return true;
   }

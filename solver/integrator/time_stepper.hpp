@@ -14,6 +14,9 @@ struct IntegratorState {
   double t = 0.0;
   Configuration q;
   VectorXd v, vdot, a, lambda;  // a: generalized-alpha's algorithmic acceleration
+  // Statics: dq/dt of the last load step (the secant predictor of the
+  // next); empty when there is none (start, a failed step, inputs changed).
+  VectorXd pathRate;
   double h = 0.0;               // substep size to try next
   // Counters since the start of the run.
   long substeps = 0;

@@ -178,7 +178,7 @@ JointSpec parseJoint(const Field& f) {
 }
 
 SolverOptions parseSolver(const Field& f) {
-  f.expectObject({"h_max", "h_min", "rho_inf", "tolerance", "max_iterations"}, {});
+  f.expectObject({"h_max", "h_min", "rho_inf", "tolerance", "max_iterations", "initial_equilibrium"}, {});
   SolverOptions s;
   if (f.has("h_max")) s.hMax = f.at("h_max").positive();
   if (f.has("h_min")) s.hMin = f.at("h_min").positive();
@@ -192,6 +192,7 @@ SolverOptions parseSolver(const Field& f) {
     s.maxIterations = f.at("max_iterations").integer();
     if (s.maxIterations < 1 || s.maxIterations > 100) f.at("max_iterations").fail("expected 1 to 100");
   }
+  if (f.has("initial_equilibrium")) s.initialEquilibrium = f.at("initial_equilibrium").boolean();
   return s;
 }
 

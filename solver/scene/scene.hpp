@@ -177,6 +177,9 @@ struct SolverOptions {
   // of a conservative system), so the default is near round-off.
   double tolerance = 1e-14;
   int maxIterations = 12;
+  // Dynamics starts from the static equilibrium under gravity and loads at
+  // the start time (solved at fmi2ExitInitializationMode), at rest.
+  bool initialEquilibrium = false;
 };
 
 // Which outputs the FMU exposes. Empty lists with `all` false expose none.

@@ -234,3 +234,18 @@ def test_input_tip_load_deflects_a_static_cantilever(tmp_path):
         assert abs(s.get("beam.node8.position.y")) < 1e-14  # unloaded again
     finally:
         s.free()
+
+
+def test_static_load_path_with_kinks_is_followed(tmp_path):
+    # Load stepping predicts each step from the last one along the path; where
+    # the path turns back (t = 0.5) or jumps (t = 0.775) the prediction is wrong
+    # and Newton must still land on the equilibrium: linear, P L^3/(3 EI).
+    scene = with_elements(load_scene("cantilever_moment"), 8)
+    P = 1e-4
+    scale = "if(0.5 - t, t, if(0.775 - t, 1 - t, 2))"
+    scene["flexible_bodies"][0]["loads"] = [{"node": 8, "force": [0, P, 0], "scale": scale}]
+    scene["experiment"] = {"stop_time": 1.0, "output_interval": 0.05}
+    r = simulate_fmu(packed(scene, tmp_path), output=["beam.node8.position.y"])
+    t = r["time"]
+    factor = np.where(t <= 0.5, t, np.where(t <= 0.775, 1 - t, 2.0))
+    assert np.max(np.abs(r["beam.node8.position.y"] - P / 3 * factor)) < 1e-6 * P / 3

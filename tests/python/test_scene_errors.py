@@ -128,6 +128,8 @@ CASES = [
      ["joints[0].drive.table[1]: expected a [t, value] pair"]),
     ("time function object without table", edit(set_in(["joints", 0, "drive"], {"points": [[0, 0], [1, 1]]})),
      ["joints[0].drive.points: unknown key; expected one of: table"]),
+    ("initial equilibrium not a boolean", edit(set_in(["solver", "initial_equilibrium"], "yes")),
+     ["solver.initial_equilibrium: expected true or false, got a string"]),
     ("duplicate names", edit(set_in(["joints", 0, "name"], "bob")),
      ["joints[0].name: duplicate name \"bob\" (already used at bodies[0].name)"]),
     ("unknown joint type", edit(set_in(["joints", 0, "type"], "hinge")), ["joints[0].type: unknown joint type \"hinge\""]),
