@@ -1,8 +1,10 @@
 // Per-step cost of the flexible mesh: a clamped cantilever of N corotational
 // beam elements (the F3 scene of examples/cantilever_vibration, tip pulse
-// included) advanced by Simulation::doStep with implicit substeps h, for
-// several N. Prints one CSV row per N: wall time per substep and per element
-// and substep, Newton iterations and factorizations per substep.
+// included; or with --scene coupled the same beam between a driven hub and a
+// tip body, see cantilever_scene.hpp) advanced by Simulation::doStep with
+// implicit substeps h, for several N. Prints one CSV row per N: wall time
+// per substep and per element and substep, Newton iterations and
+// factorizations per substep.
 //
 // Timing: each N runs `repeats` times from a fresh Simulation (scene parse
 // and assembly are not timed); the fastest run counts, which filters out
@@ -10,7 +12,7 @@
 //
 //   flexible_cost [--elements 10,20,...] [--duration 0.2] [--h 1e-3]
 //                 [--communication 0.01] [--min-time 0.5] [--max-repeats 20]
-//                 [--tolerance 1e-12] [--state FILE]
+//                 [--tolerance 1e-12] [--state FILE] [--scene cantilever|coupled|hub]
 //
 // --state FILE writes the final q, v of every N (full precision) so two
 // builds can be compared to round-off. benchmarks/flexible_phases.cpp takes
@@ -40,6 +42,7 @@ struct Options {
   double tolerance = 0.0;      // Newton tolerance; 0: the solver's default
   int maxRepeats = 20;
   std::string stateFile;
+  std::string scene = "cantilever";  // or "coupled" (hub and tip body), "hub" (hub alone)
 };
 
 struct Run {
@@ -105,6 +108,7 @@ Options parseOptions(int argc, char** argv) {
     else if (a == "--max-repeats") o.maxRepeats = std::atoi(value);
     else if (a == "--tolerance") o.tolerance = std::atof(value);
     else if (a == "--state") o.stateFile = value;
+    else if (a == "--scene" && validScene(value)) o.scene = value;
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       std::exit(2);
@@ -122,7 +126,7 @@ int main(int argc, char** argv) {
   std::printf("elements,unknowns,substeps,us_per_step,us_per_element_step,newton_per_step,factorizations_per_step,"
               "repeats\n");
   for (int n : o.elements) {
-    const mfbd::Scene scene = mfbd::parseScene(cantileverScene(n, o.h, o.tolerance));
+    const mfbd::Scene scene = mfbd::parseScene(costScene(o.scene, n, o.h, o.tolerance));
     Run best;
     best.seconds = std::numeric_limits<double>::infinity();
     double total = 0.0;

@@ -6,7 +6,10 @@
 // says how much a step costs, this says where it goes.
 //
 //   flexible_phases [--elements 10,100,...] [--duration 0.2] [--h 1e-3]
-//                   [--communication 0.01]
+//                   [--communication 0.01] [--scene cantilever|coupled|hub]
+//
+// --scene coupled: the beam with a driven hub and a tip body attached, hub:
+// the hub alone (coupledScene, benchmarks/coupled_cost.py).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -80,6 +83,7 @@ void timePhases(const mfbd::Scene& scene, double duration, double communication,
 int main(int argc, char** argv) {
   std::vector<int> elements{10, 20, 50, 100, 200, 500, 1000, 2000};
   double duration = 0.2, h = 1e-3, communication = 0.01;
+  std::string sceneName = "cantilever";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i], value = argv[i + 1];
     if (a == "--elements") {
@@ -93,6 +97,8 @@ int main(int argc, char** argv) {
       h = std::stod(value);
     } else if (a == "--communication") {
       communication = std::stod(value);
+    } else if (a == "--scene" && validScene(value)) {
+      sceneName = value;
     } else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
@@ -100,6 +106,6 @@ int main(int argc, char** argv) {
   }
   std::printf("elements,residual_ns_per_element,tangent_ns_per_element,assembly_ns_per_element,"
               "factorization_ns_per_element,solve_ns_per_element,retraction_ns_per_element\n");
-  for (int n : elements) timePhases(mfbd::parseScene(cantileverScene(n, h)), duration, communication, h, n);
+  for (int n : elements) timePhases(mfbd::parseScene(costScene(sceneName, n, h)), duration, communication, h, n);
   return 0;
 }
