@@ -135,20 +135,16 @@ void Simulation::updateQuaternions(bool reset) {
 }
 
 AdvanceResult Simulation::doStep(double H) {
-  // An input that jumped at this communication point is a discontinuity:
-  // restart generalized-alpha there (a = vdot of the new inputs), or its
-  // algorithmic acceleration would carry the old input into the step (an
-  // O(h) error that does not go away).
-  if (inputsChangedSinceStep_ && scene_.analysis == Analysis::Dynamic) {
-    IntegratorState restart = state_;
-    std::string message;
-    if (stepper_->initialize(system_, restart, message)) {
-      state_.vdot = restart.vdot;
-      state_.a = restart.vdot;
-      state_.lambda = restart.lambda;
-    }
-  }
+  // The state to come back to if the step fails: before any restart, so a
+  // retried step restarts from the same state again.
   IntegratorState start = state_;
+  // An input that jumped at this communication point is a discontinuity:
+  // restart generalized-alpha there, or its algorithmic acceleration would
+  // carry the old input into the step (an O(h) error that does not go away).
+  if (inputsChangedSinceStep_ && scene_.analysis == Analysis::Dynamic) {
+    std::string message;
+    stepper_->restartAfterInputJump(system_, state_, message);
+  }
   AdvanceResult result = stepper_->advance(system_, state_, state_.t + H);
   if (!result.ok) {
     state_ = std::move(start);

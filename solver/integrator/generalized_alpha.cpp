@@ -51,10 +51,53 @@ bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std:
   return true;
 }
 
-bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial, double h) {
+// After the inputs jump, the residual of the state is -(the jump of the
+// forces). The accelerations jump by what the next substep's Newton matrix
+// makes of it, [S Phi_q^T; Phi_q 0] [dvdot; dlambda] = [-r; 0] with
+// S = M + (gamma'/beta') C + K/beta': in modes slow for the step (K/beta' <<
+// M) that is the jump of M^-1 f that a restart a = vdot would give, removing
+// the O(h) error of the old input's acceleration; in modes too stiff for the
+// step (omega h >> 1) it is a small static response, where a = vdot would
+// put f/m into the h^2 terms of the next step (a joint torque on a flexible
+// node of tiny rotary inertia: 1e7 rad/s^2, radians per step).
+bool GeneralizedAlpha::restartAfterInputJump(Dynamics& system, IntegratorState& s, std::string& message) {
+  const int n = system.velocityCount(), m = system.constraintCount();
+  VectorXd r, phi;
+  system.residual(s.t, s.q, s.v, s.vdot, s.lambda, r, phi);
+  if (!allFinite(r)) {
+    message = "residual is not finite after the input change";
+    return false;
+  }
+  const SparseMatrix S = newtonMatrix(system, s, s.h > 0.0 ? s.h : options_.hMax);
+  LinearSolver solver;
+  solver.analyzePattern(S);
+  if (solver.factorize(S) != LinearSolver::Status::Ok) {
+    message = "singular iteration matrix after the input change";
+    return false;
+  }
+  VectorXd rhs = VectorXd::Zero(n + m);
+  rhs.head(n) = -r;
+  const VectorXd jump = solver.solve(rhs);
+  s.vdot += jump.head(n);
+  s.a += jump.head(n);
+  s.lambda += jump.tail(m);
+  return true;
+}
+
+GeneralizedAlpha::MatrixFactors GeneralizedAlpha::matrixFactors(double h) const {
   const double betaPrime = (1.0 - alphaM_) / (beta_ * h * h * (1.0 - alphaF_));
   const double gammaPrime = gamma_ / (beta_ * h);
-  if (assembleIterationMatrix(system, trial, 1.0, gammaPrime / betaPrime, 1.0 / betaPrime))
+  return {1.0, gammaPrime / betaPrime, 1.0 / betaPrime};
+}
+
+SparseMatrix GeneralizedAlpha::newtonMatrix(Dynamics& system, const IntegratorState& at, double h) const {
+  const MatrixFactors c = matrixFactors(h);
+  return iterationMatrix(system, at, c.cM, c.cC, c.cK);
+}
+
+bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial, double h) {
+  const MatrixFactors c = matrixFactors(h);
+  if (assembleIterationMatrix(system, trial, c.cM, c.cC, c.cK))
     solver_.analyzePattern(assembledIterationMatrix());
   if (solver_.factorize(assembledIterationMatrix()) != LinearSolver::Status::Ok) return false;
   factoredStep_ = h;

@@ -17,6 +17,12 @@ class GeneralizedAlpha : public TimeStepper {
 
   // Consistent initial accelerations (M vdot = Q at t) and a = vdot.
   bool initialize(Dynamics& system, IntegratorState& state, std::string& message) override;
+  // Accelerations, a and multipliers jump by the substep's own response to
+  // the jump of the forces (see the .cpp).
+  bool restartAfterInputJump(Dynamics& system, IntegratorState& state, std::string& message) override;
+  // The (regularised) Newton matrix that a substep of size h factorizes at
+  // state `at`: for diagnostics (condition number against h).
+  SparseMatrix newtonMatrix(Dynamics& system, const IntegratorState& at, double h) const;
 
  protected:
   bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why) override;
@@ -26,6 +32,11 @@ class GeneralizedAlpha : public TimeStepper {
 
  private:
   bool factorize(Dynamics& system, const IntegratorState& trial, double h);
+  // Factors of M, C and K in the scaled Newton matrix: 1, gamma'/beta', 1/beta'.
+  struct MatrixFactors {
+    double cM, cC, cK;
+  };
+  MatrixFactors matrixFactors(double h) const;
 
   double alphaM_, alphaF_, gamma_, beta_;
   LinearSolver solver_;

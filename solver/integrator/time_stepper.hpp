@@ -36,6 +36,9 @@ class TimeStepper {
   // A consistent start at state.t (accelerations, or equilibrium).
   virtual bool initialize(Dynamics& system, IntegratorState& state, std::string& message) = 0;
 
+  // The inputs jumped at state.t (the state solves the equations of the old
+  // ones): adjust the integrator's history to the new ones. Nothing by default.
+  virtual bool restartAfterInputJump(Dynamics&, IntegratorState&, std::string&) { return true; }
   // Substeps from state.t to tEnd. On failure `state` is left at an
   // intermediate time: the caller restores the step start.
   AdvanceResult advance(Dynamics& system, IntegratorState& state, double tEnd);

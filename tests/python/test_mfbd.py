@@ -8,7 +8,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from scipy.optimize import brentq
 
-from conftest import Slave, load_scene, packed
+from conftest import EXAMPLES, Slave, load_scene, packed
 from test_flexible import fitted_frequencies
 
 
@@ -187,3 +187,43 @@ def test_flexible_four_bar_with_a_joint_defect_turns_a_full_revolution(tmp_path)
     assert np.abs(tip[-1] - tip[0]).max() < 1e-6  # measured 7e-10 m
     assert 1e-3 < np.abs(tip[:, 1]).max() < 1e-2  # the defect pushes joint C out of the plane by millimetres
     assert np.abs(r["bar1.element0.end1.moment.z"]).max() > 50.0  # the bars carry the locking moment (~159 N m)
+
+
+def test_flexible_arm_under_joint_torque_inputs_sags_as_a_cantilever(tmp_path):
+    """The two-link arm with a flexible forearm, driven by a master's PD loop
+    through the joint-torque inputs (examples/flexible_robot_arm/control.py),
+    comes to rest at its goal; there the payload sits below where rigid links
+    would put it by the cantilever deflection of the forearm under the
+    payload and its own weight, P L^3 / (3 EI) + q L^4 / (8 EI) (transverse
+    parts of gravity, Euler-Bernoulli)."""
+    import importlib.util
+    path = EXAMPLES / "flexible_robot_arm" / "control.py"
+    spec = importlib.util.spec_from_file_location("flexible_arm_control", path)
+    control = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(control)
+    data = control.run(packed(load_scene("flexible_robot_arm"), tmp_path))
+    assert np.abs(data[-1, 1:3] - control.GOAL).max() < 1e-3
+    EI = 7e10 * np.pi * 0.012 ** 4 / 64
+    transverse = 9.81 * np.cos(control.GOAL.sum())
+    sag = control.MP * transverse * 0.6 ** 3 / (3 * EI) + control.M2 / 0.6 * transverse * 0.6 ** 4 / (8 * EI)
+    assert abs(data[-1, 7] / sag - 1) < 1e-2, (data[-1, 7], sag)  # measured 5.18 mm against 5.19 mm
+
+
+def test_force_element_on_a_node_acts_as_the_nodal_load(tmp_path):
+    """An applied_force element on a flexible node (through its virtual body)
+    and the flexible body's own nodal load input move the beam alike: the
+    virtual body's weld passes the force on unchanged."""
+    def run(extra, loads, inputs, name):
+        beam = dict(cantilever(4, damping=0.01), loads=loads, outputs={"nodes": [4]})
+        scene = {"format": "mfbd-scene/1", "name": name, "solver": {"h_max": 1e-3},
+                 "experiment": {"stop_time": 0.5, "output_interval": 0.01},
+                 "flexible_bodies": [beam], "forces": extra}
+        return simulate_fmu(packed(scene, tmp_path, name), start_values=inputs,
+                            output=[f"beam.node4.position.{c}" for c in "xyz"])
+    force = {"z": 0.02, "y": -0.01}
+    element = run([{"name": "push", "type": "applied_force", "body": {"flexible": "beam", "node": 4},
+                    "point": [1, 0, 0]}], [], {f"push.force.{c}": v for c, v in force.items()}, "element")
+    nodal = run([], [{"node": 4, "input": True}], {f"beam.node4.force.{c}": v for c, v in force.items()}, "nodal")
+    for c in "xyz":
+        assert np.abs(element[f"beam.node4.position.{c}"] - nodal[f"beam.node4.position.{c}"]).max() < 1e-10
+    assert np.abs(nodal["beam.node4.position.z"]).max() > 1e-3  # it does move

@@ -70,7 +70,7 @@ CASES = [
     ("NaN from an expression", edit(set_in(["bodies", 0, "mass"], "0/0")), ["bodies[0].mass: expected a finite number"]),
     ("Inf literal", edit(set_in(["gravity"], [0, 12345.678, 0])).replace("12345.678", "1e999"),
      ["scene: not valid JSON", "number overflow parsing '1e999'"]),
-    ("negative mass", edit(set_in(["bodies", 0, "mass"], -2)), ["bodies[0].mass: expected a positive number"]),
+    ("negative mass", edit(set_in(["bodies", 0, "mass"], -2)), ["bodies[0].mass: expected a number >= 0"]),
     ("negative principal moment", edit(set_in(["bodies", 0, "inertia"], [-1, 1, 1])),
      ["bodies[0].inertia: expected an inertia tensor with principal moments >= 0"]),
     ("triangle inequality", edit(set_in(["bodies", 0, "inertia"], [1, 1, 3])),
