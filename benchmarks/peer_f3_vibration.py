@@ -38,10 +38,11 @@ STOP, OUTPUT, FIT_FROM = 10.0, 0.01, 1.0
 RHO_INF = 0.9
 
 
-def first_frequency(t, y):
-    """f1 from a fit of four undamped modes (plus offset) to y(t), t >= FIT_FROM.
+def first_frequency(t, y, modes=EXACT):
+    """f1 from a fit of undamped modes (plus offset) to y(t), t >= FIT_FROM,
+    one per frequency of `modes` (default: the four Euler-Bernoulli ones).
     Starting guesses: the spectral peak of each mode, searched within
-    0.6 ... 1.8 times its Euler-Bernoulli frequency (a coarse mesh moves the
+    0.6 ... 1.8 times its exact frequency (a coarse mesh moves the
     higher modes far from it, and a fit started there can settle wrongly)."""
     keep = t >= FIT_FROM - 1e-9
     t, y = t[keep], (y[keep] - y[keep].mean()) / y[keep].std()
@@ -49,7 +50,7 @@ def first_frequency(t, y):
     spectrum = np.abs(np.fft.rfft(y * np.hanning(len(t)), pad))
     frequencies = np.fft.rfftfreq(pad, t[1] - t[0])
     guesses = []
-    for f in EXACT:
+    for f in modes:
         band = (frequencies > 0.6 * f) & (frequencies < 1.8 * f)
         guesses.append(frequencies[band][np.argmax(spectrum[band])] if band.any() else f)
 

@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Wall time at matched error, from the CSVs of the peer studies
 (peer_r1_pendulum.py, peer_f1_end_moment.py, peer_f3_vibration.py,
-peer_f4_spin_up.py): for each problem, metric and error level, the cheapest
+peer_f4_spin_up.py, and the rigid + flexible ones of issue 5:
+peer_f4_motor.py, peer_f5_slider_crank.py, peer_f6_four_bar.py,
+peer_tip_mass.py): for each problem, metric and error level, the cheapest
 run of each code and model that reached the level (no interpolation), and
 the ratio of our wall time to the fastest Exudyn model's. Writes
 peer_summary.csv and prints the same as a Markdown table.
@@ -19,6 +21,12 @@ STUDIES = {
     "F3 vibration": ("f3_vibration_precision.csv", [("error", "f1, relative", [1e-2, 2e-3, 5e-4])]),
     "F4 spin-up": ("f4_spin_up_precision.csv", [("error", "tip deflection at 7 s [m]", [1e-2, 1e-3, 1e-4]),
                                                 ("elongation_error", "steady elongation [m]", [1e-5, 1e-6, 1e-7])]),
+    "F4 motor-driven hub": ("f4_motor_precision.csv", [("error", "tip deflection at 7 s [m]", [1e-2, 1e-3, 1e-4])]),
+    "F5 slider-crank": ("f5_slider_crank_precision.csv",
+                        [("error", "mid-span deflection, max over 0.4 s [m]", [1e-3, 3e-4, 1e-4, 3e-5])]),
+    "F6 four-bar": ("f6_four_bar_precision.csv",
+                    [("error", "drive torque away from the snaps [N m]", [2e-1, 5e-2, 2e-2, 5e-3, 1e-4])]),
+    "Tip mass": ("tip_mass_precision.csv", [("error", "f1, relative", [1e-2, 2e-3, 5e-4])]),
 }
 
 

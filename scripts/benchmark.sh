@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Error against run time studies (not tests): CSV and PNG in benchmarks/results/.
 # Our FMU alone (pendulum_precision.py), then the peer comparisons with Exudyn
-# (peer_*.py, Exudyn from benchmarks/requirements.txt) and the wall time at
-# matched error (peer_summary.py -> peer_summary.csv). About 3 minutes on 2 cores.
+# (peer_*.py, Exudyn from benchmarks/requirements.txt; the rigid + flexible ones
+# of issue 5 after the flexible ones) and the wall time at matched error
+# (peer_summary.py -> peer_summary.csv); then the per-step cost studies
+# (C++ drivers). About 9 minutes on 2 cores (see benchmarks/README.md).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/setup.sh"
@@ -10,11 +12,14 @@ cd "$root"
 .venv/bin/python -m pip install -q -r benchmarks/requirements.txt
 out=benchmarks/results
 .venv/bin/python benchmarks/pendulum_precision.py --out "$out"
-for study in peer_r1_pendulum peer_f1_end_moment peer_f3_vibration peer_f4_spin_up; do
+for study in peer_r1_pendulum peer_f1_end_moment peer_f3_vibration peer_f4_spin_up \
+             peer_f4_motor peer_f5_slider_crank peer_f6_four_bar peer_tip_mass; do
   .venv/bin/python "benchmarks/$study.py" --out "$out"
 done
 .venv/bin/python benchmarks/peer_summary.py --out "$out"
-# Per-step cost of the flexible mesh against element count (C++ driver, built here).
+# Per-step cost of the flexible mesh against element count (C++ driver, built here),
+# alone and with rigid bodies attached.
 .venv/bin/python benchmarks/flexible_cost.py --out "$out"
+.venv/bin/python benchmarks/coupled_cost.py --phases --out "$out"
 # Per-step cost of a rigid pendulum chain against the number of bodies (C++ driver, built here).
 .venv/bin/python benchmarks/chain_cost.py --out "$out"

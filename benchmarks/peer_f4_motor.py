@@ -1,0 +1,200 @@
+#!/usr/bin/env python3
+"""F4 spin-up beam driven through a motor (issue 5): a rigid hub on a driven
+revolute joint, the beam's root welded to the hub. Our FMU against Exudyn,
+error against run time over paired refinements (elements n, substep h) =
+(4, 4e-3), (8, 2e-3), (16, 1e-3), (32, 5e-4); each run simulates 7 s
+(outputs every 0.04 s) and yields the tip deflection in the rotating frame at
+t = 7 s. Error: against a converged run of our FMU (n = 64 and 128 at
+h = 5e-4, extrapolated in n, order 2), written to f4_motor_reference.csv
+with the same extrapolation of Exudyn's runs and, for comparison, the
+prescribed-root-node reference of peer_f4_spin_up.py when its CSV is there.
+
+Same data for both codes: the beam of peer_f4_spin_up.py (L = 10, EA = 2.8e7,
+GA = 1e7, EI = 1.4e4, rho A = 1.2, rho I = 6e-4); hub: mass 10 kg, inertia
+2 kg m^2 about the spin axis, its centre on the axis at the beam's root;
+motor angle theta(t) of peer_f4_spin_up.py; generalized-alpha rho_inf = 0.8;
+Newton stops on the increment, 1e-12.
+
+Ours: the spin_up_beam scene with its "driven" support replaced by a body
+"hub" on a revolute joint to ground with the drive theta(t) and a fixed
+joint from the hub to node 0 of the beam (so a virtual body, welded to the
+node by a flexible body joint): as tests/python/test_mfbd.py
+test_motor_driven_hub_reproduces_the_prescribed_root_node.
+Exudyn: the same in 2D: ObjectRigidBody2D hub (NodeRigidBody2D) on an
+ObjectJointRevolute2D to ground, driven by an ObjectConnectorCoordinate on
+the hub's rotation coordinate whose offset is theta(t) (Exudyn symbolic user
+functions, as peer_f4_spin_up.py); the fixed joint hub - root node is an
+ObjectJointRevolute2D (positions) plus an ObjectConnectorCoordinate between
+the two rotation coordinates (a 2D weld, 3 constraints);
+ObjectBeamGeometricallyExact2D elements.
+Writes f4_motor_precision.csv, f4_motor_reference.csv and f4_motor_precision.png.
+"""
+import argparse
+import pathlib
+import time
+
+import numpy as np
+
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, load_scene, \
+    plot_precision_work, read_csv, save_figure, write_csv
+from peer_f4_spin_up import EA, EI, GA, L, RHO_A, RHO_I, RHO_INF, _hub_offset, _hub_rate, extrapolated, hub_angle
+
+HUB_MASS, HUB_INERTIA = 10.0, 2.0
+PAIRS = [(4, 4e-3), (8, 2e-3), (16, 1e-3), (32, 5e-4)]
+REFERENCE = [(64, 5e-4), (128, 5e-4)]
+STOP, OUTPUT = 7.0, 0.04  # the metric is at STOP; every h divides OUTPUT
+
+
+def tip_deflection(t, tip_xy):
+    """Tip deflection in the frame turning with the hub, at time t."""
+    theta = float(hub_angle(t))
+    return float(-np.sin(theta) * tip_xy[0] + np.cos(theta) * tip_xy[1])
+
+
+def motor_scene(n):
+    scene = load_scene("spin_up_beam")
+    body = scene["flexible_bodies"][0]
+    body["beam"]["elements"] = n
+    angle = body.pop("supports")[0]["angle"]
+    body["outputs"] = {"nodes": [n]}
+    scene["bodies"] = [{"name": "hub", "mass": HUB_MASS, "inertia": [1, 1, HUB_INERTIA], "position": [0, 0, 0]}]
+    scene["joints"] = [
+        {"name": "motor", "type": "revolute", "parent": "ground", "child": "hub", "position": [0, 0, 0],
+         "axis": [0, 0, 1], "drive": angle},
+        {"name": "root", "type": "fixed", "parent": "hub", "child": {"flexible": "beam", "node": 0}}]
+    return scene
+
+
+def ours(fmu, n, h):
+    run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF})
+    names = [f"beam.node{n}.position.{c}" for c in "xy"]
+    try:
+        start = time.perf_counter()
+        run.initialize()
+        for _ in range(int(round(STOP / OUTPUT))):
+            run.step(OUTPUT)
+            tip = run.get(*names)
+        wall = time.perf_counter() - start
+        statistics = run.statistics()
+    finally:
+        run.free()
+    return dict(wall_time_s=wall, tip=tip_deflection(STOP, tip), **statistics)
+
+
+def exudyn_motor_2d(n, h):
+    import exudyn as exu
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+    from exudyn.itemInterface import MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, NodePointGround, \
+        NodeRigidBody2D, ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate, ObjectGround, \
+        ObjectJointRevolute2D, ObjectRigidBody2D, SensorNode
+
+    mbs = exu.SystemContainer().AddSystem()
+    nodes = [mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[L * i / n, 0.0, 0.0])) for i in range(n + 1)]
+    for i in range(n):
+        mbs.AddObject(ObjectBeamGeometricallyExact2D(
+            nodeNumbers=[nodes[i], nodes[i + 1]], length=L / n, massPerLength=RHO_A, crossSectionInertia=RHO_I,
+            bendingStiffness=EI, axialStiffness=EA, shearStiffness=GA))
+    hub_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0.0, 0.0, 0.0]))
+    hub = mbs.AddObject(ObjectRigidBody2D(nodeNumber=hub_node, mass=HUB_MASS, inertia=HUB_INERTIA))
+    ground = mbs.AddObject(ObjectGround())
+    ground_node = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+    # Motor: revolute joint hub - ground, and its angle driven by a coordinate constraint.
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[0.0, 0.0, 0.0])),
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=hub, localPosition=[0.0, 0.0, 0.0]))]))
+    drive = mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0)),
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=hub_node, coordinate=2))]))
+    offset = CreateSymbolicUserFunction(mbs, _hub_offset, "offsetUserFunction", drive)  # alive through the solve
+    rate = CreateSymbolicUserFunction(mbs, _hub_rate, "offsetUserFunction_t", drive)
+    mbs.SetObjectParameter(drive, "offsetUserFunction", offset)
+    mbs.SetObjectParameter(drive, "offsetUserFunction_t", rate)
+    # Fixed joint hub - root node: positions and rotations equal.
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=hub, localPosition=[0.0, 0.0, 0.0])),
+        mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[0]))]))
+    mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=hub_node, coordinate=2)),
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=2))]))
+    sensor = mbs.AddSensor(SensorNode(nodeNumber=nodes[-1], outputVariableType=exu.OutputVariableType.Position,
+                                      storeInternal=True, writeToFile=False))
+    mbs.Assemble()
+    settings = exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF, sensor_period=OUTPUT, sparse=n >= 16)
+    wall, statistics = exudyn_solve(mbs, settings)
+    data = mbs.GetSensorStoredData(sensor)
+    assert abs(data[-1, 0] - STOP) < 1e-9, data[-1, 0]
+    return dict(wall_time_s=wall, tip=tip_deflection(STOP, data[-1, 1:3]), **statistics)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
+    parser.add_argument("--repeats", type=int, default=2)
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+
+    factory = SceneFactory()
+    try:
+        fmus = {n: factory.fmu(motor_scene(n), f"motor{n}") for n, _ in PAIRS + REFERENCE}
+        runs = {OURS: lambda n, h: ours(fmus[n], n, h), EXUDYN: exudyn_motor_2d}
+        reference_rows, extrapolations = [], {}
+        for code, run in runs.items():
+            tips = []
+            for n, h in REFERENCE:
+                r = run(n, h)
+                tips.append(r["tip"])
+                reference_rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"], error="",
+                                           h_s=h, tip_deflection_7s_m=r["tip"], kind="run"))
+                print(f"F4 motor reference {code:9s} n={n:4d} h={h:7.1e}  tip at 7 s {r['tip']:.9f} m  "
+                      f"wall {r['wall_time_s']:.2f} s", flush=True)
+            extrapolations[code] = extrapolated(*tips)
+            reference_rows.append(dict(code=code, h_or_elements="extrapolated", wall_time_s="", error="",
+                                       h_s=REFERENCE[-1][1], tip_deflection_7s_m=extrapolations[code],
+                                       kind="Richardson in n, order 2"))
+        reference = extrapolations[OURS]
+        print(f"F4 motor reference tip deflection at 7 s: ours {reference:.9f} m, Exudyn "
+              f"{extrapolations[EXUDYN]:.9f} m (difference {abs(reference - extrapolations[EXUDYN]):.1e} m)")
+        spin_up = args.out / "f4_spin_up_reference.csv"
+        if spin_up.exists():  # the prescribed-root-node version (peer_f4_spin_up.py)
+            for r in read_csv(spin_up):
+                if r["h_or_elements"] == "extrapolated":
+                    reference_rows.append(dict(r, code=r["code"], kind=r["kind"] + ", prescribed root node "
+                                               "(f4_spin_up_reference.csv)"))
+                    print(f"  prescribed root node, {r['code']}: {float(r['tip_deflection_7s_m']):.9f} m")
+
+        rows = []
+        models = {OURS: "hub on driven revolute, fixed joint to 3D corotational beam",
+                  EXUDYN: "RigidBody2D hub, Revolute2D + coordinate drive, weld to BeamGeometricallyExact2D"}
+        for code, run in runs.items():
+            for n, h in PAIRS:
+                r = best_of(lambda: run(n, h), args.repeats)
+                rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"],
+                                 error=abs(r["tip"] - reference), model=models[code], h_s=h,
+                                 tip_deflection_7s_m=r["tip"], steps=r["steps"],
+                                 newton_iterations=r["newton_iterations"],
+                                 factorizations=r.get("factorizations", ""),
+                                 rejected_steps=r.get("rejected_steps", "")))
+                print(f"F4 motor {code:9s} n={n:4d} h={h:7.1e}  wall {r['wall_time_s']:7.3f} s  tip at 7 s "
+                      f"{r['tip']:.6f} m (error {rows[-1]['error']:8.2e})  Newton it/step "
+                      f"{r['newton_iterations'] / r['steps']:.2f}", flush=True)
+    finally:
+        factory.close()
+    write_csv(args.out / "f4_motor_precision.csv", rows)
+    write_csv(args.out / "f4_motor_reference.csv", reference_rows)
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    plot_precision_work(ax, rows)
+    ax.set_ylabel("tip deflection error at t = 7 s [m]")
+    ax.set_xlabel("wall time for 7 s simulated [s]")
+    ax.set_title(f"F4 motor-driven hub: tip deflection at 7 s vs converged {reference:.6f} m\n"
+                 "(labels: elements; h = 0.016/n)", fontsize=9)
+    png = args.out / "f4_motor_precision.png"
+    save_figure(fig, png)
+    print(f"wrote {(args.out / 'f4_motor_precision.csv').resolve()}\nwrote {png.resolve()}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,230 @@
+#!/usr/bin/env python3
+"""F5 flexible slider-crank (Simo & Vu-Quoc; Jonker), our FMU against Exudyn:
+error of the rod's mid-span deflection curve against run time, over paired
+refinements (elements n, substep h) = PAIRS below; each run simulates 0.4 s.
+
+Problem (examples/flexible_slider_crank): rigid crank 0.15 m, its angle
+driven by a smooth spin-up to 150 rad/s over T = 0.15 s, then constant,
+theta(t) = (omega/T)(t^2/2 + (T/(2 pi))^2 (cos(2 pi t/T) - 1)) up to T, then
+omega T/2 + omega (t - T); flexible steel rod 0.30 m, circle d = 6 mm,
+E = 200 GPa, nu = 0.3, rho = 7870 (EA = 5.655e6 N, GA = 1.928e6 N with the
+shear factor 6(1+nu)/(7+6nu), EI = 12.72 N m^2, rho A = 0.2225 kg/m,
+rho I = 5.007e-7 kg m); massless slider on a prismatic joint along x,
+pinned to the rod's end. No gravity. Generalized-alpha rho_inf = 0.8;
+Newton stops on the increment, 1e-12.
+
+Metric: mid-span deflection d(t) = the transverse offset of the rod's mid
+node from the chord through its end nodes (tests/python/test_mfbd.py
+slider_crank_midspan_deflection), sampled every 1 ms over 0 < t <= 0.4 s.
+error = max over the samples of |d(t) - d_ref(t)|, d_ref a converged run of
+the same code (REFERENCE below). The two codes' converged curves are
+compared with each other (f5_slider_crank_reference.csv: max difference and
+the largest deflection); the error of each code's runs against the other
+code's reference is in the CSV too (error_vs_other_reference).
+
+Ours: the scene as it is (crank on a driven revolute joint; rod ends on
+revolute joints to the crank and to the massless slider: two virtual bodies
+and flexible body joints; 3D corotational beam, 6 coordinates per node).
+Exudyn, 2D: crank ObjectRigidBody2D on an ObjectJointRevolute2D to ground,
+its rotation coordinate driven by an ObjectConnectorCoordinate whose offset
+is theta(t) (symbolic user functions); ObjectBeamGeometricallyExact2D rod;
+crank pin ObjectJointRevolute2D (crank point - rod node 0); the massless
+slider on its prismatic joint with a pin to the rod's end is modelled by
+what it imposes, an ObjectConnectorCoordinate holding the end node's y at 0
+(Exudyn cannot carry a massless body without a singular mass matrix).
+Wall time: the whole 0.4 s run, outputs every 1 ms in both codes.
+Writes f5_slider_crank_precision.csv, f5_slider_crank_reference.csv and
+f5_slider_crank_precision.png (error against wall time; the curves).
+"""
+import argparse
+import pathlib
+import time
+
+import numpy as np
+
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, load_scene, \
+    plot_precision_work, save_figure, write_csv
+
+CRANK, ROD, OMEGA, T_UP = 0.15, 0.30, 150.0, 0.15
+E, NU, RHO, D = 2e11, 0.3, 7870.0, 0.006
+AREA, I_AREA = np.pi * D**2 / 4, np.pi * D**4 / 64
+EA, EI = E * AREA, E * I_AREA
+GA = 6 * (1 + NU) / (7 + 6 * NU) * E / (2 * (1 + NU)) * AREA
+RHO_A, RHO_I = RHO * AREA, RHO * I_AREA
+CRANK_MASS, CRANK_INERTIA = 0.1, 7.5e-4
+STOP, OUTPUT = 0.4, 1e-3
+PAIRS = [(2, 5e-4), (4, 2.5e-4), (8, 1.25e-4), (16, 6.25e-5), (32, 3.125e-5)]  # every h divides OUTPUT
+REFERENCE = (64, 1.5625e-5)
+RHO_INF = 0.8
+
+
+def midspan_deflection(p0, pm, pn):
+    """Offset of the mid node pm from the chord p0 -> pn (arrays (time, 2)),
+    positive to the left of the chord."""
+    chord = pn - p0
+    chord /= np.linalg.norm(chord, axis=1)[:, None]
+    offset = pm - 0.5 * (p0 + pn)
+    return chord[:, 0] * offset[:, 1] - chord[:, 1] * offset[:, 0]
+
+
+def slider_crank_scene(n):
+    scene = load_scene("flexible_slider_crank")
+    scene["flexible_bodies"][0]["beam"]["elements"] = n
+    scene["flexible_bodies"][0]["outputs"] = {"nodes": [0, n // 2, n]}
+    scene["solver"]["rho_inf"] = RHO_INF
+    return scene
+
+
+def ours(fmu, n, h):
+    run = FmuRun(fmu, {"solver.h_max": h})
+    names = [f"rod.node{i}.position.{c}" for i in (0, n // 2, n) for c in "xy"]
+    try:
+        samples = []
+        start = time.perf_counter()
+        run.initialize()
+        for _ in range(int(round(STOP / OUTPUT))):
+            run.step(OUTPUT)
+            samples.append(run.get(*names))
+        wall = time.perf_counter() - start
+        statistics = run.statistics()
+    finally:
+        run.free()
+    p = np.array(samples).reshape(-1, 3, 2)
+    return dict(wall_time_s=wall, deflection=midspan_deflection(p[:, 0], p[:, 1], p[:, 2]), **statistics)
+
+
+def _crank_angle(mbs, t, itemNumber, lOffset):
+    import exudyn as exu
+    sym = exu.symbolic
+    ramp = OMEGA / T_UP * (t * t / 2 + (T_UP / (2 * np.pi))**2 * (sym.cos(2 * np.pi / T_UP * t) - 1))
+    return sym.IfThenElse(t <= T_UP, ramp, OMEGA * T_UP / 2 + OMEGA * (t - T_UP))
+
+
+def _crank_rate(mbs, t, itemNumber, lOffset):
+    import exudyn as exu
+    sym = exu.symbolic
+    ramp = OMEGA / T_UP * (t - T_UP / (2 * np.pi) * sym.sin(2 * np.pi / T_UP * t))
+    return sym.IfThenElse(t <= T_UP, ramp, sym.Real(OMEGA))
+
+
+def exudyn_slider_crank_2d(n, h):
+    import exudyn as exu
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+    from exudyn.itemInterface import MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, NodePointGround, \
+        NodeRigidBody2D, ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate, ObjectGround, \
+        ObjectJointRevolute2D, ObjectRigidBody2D, SensorNode
+
+    mbs = exu.SystemContainer().AddSystem()
+    nodes = [mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[CRANK + ROD * i / n, 0.0, 0.0]))
+             for i in range(n + 1)]
+    for i in range(n):
+        mbs.AddObject(ObjectBeamGeometricallyExact2D(
+            nodeNumbers=[nodes[i], nodes[i + 1]], length=ROD / n, massPerLength=RHO_A, crossSectionInertia=RHO_I,
+            bendingStiffness=EI, axialStiffness=EA, shearStiffness=GA))
+    crank_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[CRANK / 2, 0.0, 0.0]))
+    crank = mbs.AddObject(ObjectRigidBody2D(nodeNumber=crank_node, mass=CRANK_MASS, inertia=CRANK_INERTIA))
+    ground = mbs.AddObject(ObjectGround())
+    ground_node = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+    fixed = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=[0.0, 0.0, 0.0])),
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=crank, localPosition=[-CRANK / 2, 0.0, 0.0]))]))
+    drive = mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
+        fixed, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=crank_node, coordinate=2))]))
+    angle = CreateSymbolicUserFunction(mbs, _crank_angle, "offsetUserFunction", drive)  # alive through the solve
+    rate = CreateSymbolicUserFunction(mbs, _crank_rate, "offsetUserFunction_t", drive)
+    mbs.SetObjectParameter(drive, "offsetUserFunction", angle)
+    mbs.SetObjectParameter(drive, "offsetUserFunction_t", rate)
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=crank, localPosition=[CRANK / 2, 0.0, 0.0])),
+        mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[0]))]))
+    mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
+        fixed, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[-1], coordinate=1))]))
+    sensors = [mbs.AddSensor(SensorNode(nodeNumber=nodes[i], outputVariableType=exu.OutputVariableType.Position,
+                                        storeInternal=True, writeToFile=False)) for i in (0, n // 2, n)]
+    mbs.Assemble()
+    settings = exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF, sensor_period=OUTPUT, sparse=n >= 16)
+    wall, statistics = exudyn_solve(mbs, settings)
+    data = [mbs.GetSensorStoredData(s) for s in sensors]
+    t = data[0][:, 0]
+    keep = t > 0.5 * OUTPUT  # the sensors also store t = 0
+    assert np.allclose(t[keep], OUTPUT * np.arange(1, keep.sum() + 1), atol=1e-9), t[:3]
+    return dict(wall_time_s=wall, deflection=midspan_deflection(*(d[keep, 1:3] for d in data)), **statistics)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
+    parser.add_argument("--repeats", type=int, default=2)
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+
+    factory = SceneFactory()
+    try:
+        fmus = {n: factory.fmu(slider_crank_scene(n), f"crank{n}") for n, _ in PAIRS + [REFERENCE]}
+        runs = {OURS: lambda n, h: ours(fmus[n], n, h), EXUDYN: exudyn_slider_crank_2d}
+        models = {OURS: "crank on driven revolute, massless slider, 3D corotational rod",
+                  EXUDYN: "RigidBody2D crank, coordinate drive, BeamGeometricallyExact2D rod"}
+        reference, reference_rows = {}, []
+        for code, run in runs.items():
+            r = run(*REFERENCE)
+            reference[code] = r["deflection"]
+            reference_rows.append(dict(code=code, h_or_elements=REFERENCE[0], wall_time_s=r["wall_time_s"],
+                                       error="", h_s=REFERENCE[1],
+                                       max_abs_deflection_m=float(np.abs(r["deflection"]).max())))
+            print(f"F5 reference {code:9s} n={REFERENCE[0]} h={REFERENCE[1]:.1e}: largest |deflection| "
+                  f"{np.abs(r['deflection']).max():.6e} m, wall {r['wall_time_s']:.2f} s", flush=True)
+        agreement = float(np.abs(reference[OURS] - reference[EXUDYN]).max())
+        for row in reference_rows:
+            row["max_abs_difference_between_codes_m"] = agreement
+        print(f"F5 converged curves, ours against Exudyn: max |difference| {agreement:.3e} m "
+              f"({agreement / np.abs(reference[OURS]).max():.2e} of the largest deflection)", flush=True)
+
+        rows, curves = [], {}
+        other = {OURS: EXUDYN, EXUDYN: OURS}
+        for code, run in runs.items():
+            for n, h in PAIRS:
+                r = best_of(lambda: run(n, h), args.repeats)
+                curves[(code, n)] = r["deflection"]
+                rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"],
+                                 error=float(np.abs(r["deflection"] - reference[code]).max()), model=models[code],
+                                 h_s=h,
+                                 error_vs_other_reference=float(np.abs(r["deflection"] - reference[other[code]]).max()),
+                                 max_abs_deflection_m=float(np.abs(r["deflection"]).max()), steps=r["steps"],
+                                 newton_iterations=r["newton_iterations"],
+                                 factorizations=r.get("factorizations", ""),
+                                 rejected_steps=r.get("rejected_steps", "")))
+                print(f"F5 {code:9s} n={n:4d} h={h:7.1e}  wall {r['wall_time_s']:7.3f} s  max |d - d_ref| "
+                      f"{rows[-1]['error']:8.2e} m  Newton it/step {r['newton_iterations'] / r['steps']:.2f}",
+                      flush=True)
+    finally:
+        factory.close()
+    write_csv(args.out / "f5_slider_crank_precision.csv", rows)
+    write_csv(args.out / "f5_slider_crank_reference.csv", reference_rows)
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.8))
+    plot_precision_work(a, rows)
+    a.set_xlabel("wall time for 0.4 s simulated [s]")
+    a.set_ylabel("max |d(t) - d_ref(t)| over 0..0.4 s [m]")
+    a.set_title(f"F5 slider-crank: mid-span deflection vs converged run of the same code\n"
+                f"(n = {REFERENCE[0]}, h = {REFERENCE[1]:g}; labels: elements, h = 1e-3/n)", fontsize=9)
+    t = OUTPUT * np.arange(1, len(reference[OURS]) + 1)
+    b.plot(t, 1e3 * reference[OURS], "C0-", lw=1.5, label=f"{OURS}, n = {REFERENCE[0]}")
+    b.plot(t, 1e3 * reference[EXUDYN], "C3--", lw=1.5, label=f"{EXUDYN}, n = {REFERENCE[0]}")
+    b.plot(t, 1e3 * curves[(OURS, PAIRS[1][0])], "C9:", lw=1, label=f"{OURS}, n = {PAIRS[1][0]}")
+    b.plot(t, 1e3 * curves[(EXUDYN, PAIRS[1][0])], "C1:", lw=1, label=f"{EXUDYN}, n = {PAIRS[1][0]}")
+    b.set_xlabel("t [s]")
+    b.set_ylabel("mid-span deflection [mm]")
+    b.set_title(f"converged curves differ by at most {agreement:.2e} m", fontsize=9)
+    b.grid(True, alpha=0.3)
+    b.legend(fontsize=7)
+    png = args.out / "f5_slider_crank_precision.png"
+    save_figure(fig, png)
+    print(f"wrote {(args.out / 'f5_slider_crank_precision.csv').resolve()}\nwrote {png.resolve()}")
+
+
+if __name__ == "__main__":
+    main()

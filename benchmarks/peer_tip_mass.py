@@ -1,0 +1,187 @@
+#!/usr/bin/env python3
+"""Cantilever with a rigid tip body on a fixed joint (issue 5), our FMU
+against Exudyn: error of the first bending frequency against the analytic
+value, over paired refinements (elements n, substep h) = (4, 1e-2),
+(8, 5e-3), (16, 2.5e-3), (32, 1.25e-3), and the wall time of the run.
+
+Problem: clamped Euler-Bernoulli beam L = 1, EI = 10, rho A = 1 (EA = 1e7,
+rho I = 1e-6); at its end a rigid body of mass M = 1 kg (mu = M/(rho A L) = 1)
+and no rotary inertia, its centre at the beam's end, on a fixed joint.
+Analytic frequencies (tests/python/test_mfbd.py tip_mass_frequencies): roots
+l of 1 + cos l cosh l + mu l (cos l sinh l - sin l cosh l) = 0,
+f = l^2 sqrt(EI/(rho A L^4))/(2 pi): f1 = 0.7837757 Hz (l = 1.2479174), then
+8.18, 25.6, 52.9 Hz.
+
+Procedure (that of peer_f3_vibration.py, in both codes): a tip force pulse
+0.01 EI/L^2 sin^2(pi t/0.02 s) for 0.02 s on the beam's end node, free
+vibration to 10 s, the tip body's y sampled every 0.01 s, f1 from a
+least-squares fit of four modes over 1-10 s (starting guesses from the
+spectrum near the analytic frequencies; the fourth, above the sampling's
+Nyquist frequency, enters aliased, which the fit represents exactly).
+Generalized-alpha rho_inf = 0.9; Newton stops on the increment, 1e-12.
+
+Ours: the tests' scene: a body "tip" (mass 1, inertia 0) on a fixed joint whose
+parent is the point at 1.0 along the flexible body (a virtual body welded to
+the end node); 3D corotational beam, shear-rigid, lumped nodal inertia.
+Exudyn, 2D: ObjectBeamGeometricallyExact2D (GA = EA: shear-rigid in effect),
+root clamped by three coordinate constraints; the tip body an
+ObjectRigidBody2D (mass 1, inertia 0) on its own NodeRigidBody2D, welded to
+the end node by an ObjectJointRevolute2D (positions) and an
+ObjectConnectorCoordinate between the rotation coordinates (the weld's
+rotation row makes the zero-inertia body's matrix regular, as our fixed
+joint does); the pulse a LoadForceVector with a symbolic user function.
+Writes tip_mass_precision.csv and .png.
+"""
+import argparse
+import pathlib
+import time
+
+import numpy as np
+from scipy.optimize import brentq
+
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, \
+    plot_precision_work, save_figure, write_csv
+from peer_f3_vibration import first_frequency
+
+L, EI, RHO_A, EA, RHO_I, TIP_MASS = 1.0, 10.0, 1.0, 1e7, 1e-6, 1.0
+PULSE, FORCE = 0.02, 0.01 * EI / L**2
+PAIRS = [(4, 1e-2), (8, 5e-3), (16, 2.5e-3), (32, 1.25e-3)]
+STOP, OUTPUT = 10.0, 0.01
+RHO_INF = 0.9
+
+
+def tip_mass_frequencies(mu=TIP_MASS / (RHO_A * L), count=4):
+    """The first `count` bending frequencies (Hz) of a clamped Euler-Bernoulli
+    beam with a tip point mass mu rho A L."""
+    g = lambda l: 1 + np.cos(l) * np.cosh(l) + mu * l * (np.cos(l) * np.sinh(l) - np.sin(l) * np.cosh(l))
+    x = np.linspace(0.1, 4 * count, 40000)
+    v = g(x)
+    roots = [brentq(g, x[i], x[i + 1]) for i in np.nonzero(np.sign(v[:-1]) != np.sign(v[1:]))[0][:count]]
+    return np.array(roots)**2 * np.sqrt(EI / (RHO_A * L**4)) / (2 * np.pi)
+
+
+EXACT = tip_mass_frequencies()  # 0.7837757, 8.1785, 25.615, 52.945 Hz
+
+
+def tip_mass_scene(n):
+    return {"format": "mfbd-scene/1", "name": "tip_mass", "solver": {"h_max": 1e-3, "rho_inf": RHO_INF},
+            "parameters": {"pulse": {"value": PULSE}},
+            "bodies": [{"name": "tip", "mass": TIP_MASS, "inertia": [0, 0, 0], "position": [L, 0, 0]}],
+            "joints": [{"name": "weld", "type": "fixed", "parent": {"flexible": "beam", "at": 1.0}, "child": "tip"}],
+            "flexible_bodies": [{
+                "name": "beam", "beam": {"start": [0, 0, 0], "end": [L, 0, 0], "elements": n, "section_y": [0, 1, 0]},
+                "section": {"EA": EA, "GJ": EI, "EIy": EI, "EIz": EI, "rhoA": RHO_A,
+                            "rhoJ": [2 * RHO_I, RHO_I, RHO_I]},
+                "supports": [{"node": 0, "type": "clamp"}],
+                "loads": [{"node": n, "force": [0, FORCE, 0], "scale": "if(pulse - t, sin(pi*t/pulse)^2, 0)"}],
+                "outputs": {"nodes": [n]}}]}
+
+
+def ours(fmu, h):
+    run = FmuRun(fmu, {"solver.h_max": h})
+    try:
+        tip = []
+        start = time.perf_counter()
+        run.initialize()
+        for _ in range(int(round(STOP / OUTPUT))):
+            run.step(OUTPUT)
+            tip.append(run.get("tip.position.y"))
+        wall = time.perf_counter() - start
+        statistics = run.statistics()
+    finally:
+        run.free()
+    t = OUTPUT * np.arange(1, len(tip) + 1)
+    return dict(wall_time_s=wall, f1=first_frequency(t, np.array(tip), EXACT), **statistics)
+
+
+def _pulse(mbs, t, loadVector):
+    import exudyn as exu
+    sym = exu.symbolic
+    s = sym.sin(np.pi / PULSE * t)
+    return [0, sym.IfThenElse(t < PULSE, FORCE * s * s, sym.Real(0.0)), 0]
+
+
+def exudyn_beam_2d(n, h):
+    import exudyn as exu
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+    from exudyn.itemInterface import LoadForceVector, MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, \
+        NodePointGround, NodeRigidBody2D, ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate, \
+        ObjectJointRevolute2D, ObjectRigidBody2D, SensorBody
+
+    mbs = exu.SystemContainer().AddSystem()
+    nodes = [mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[L * i / n, 0.0, 0.0])) for i in range(n + 1)]
+    for i in range(n):
+        mbs.AddObject(ObjectBeamGeometricallyExact2D(
+            nodeNumbers=[nodes[i], nodes[i + 1]], length=L / n, massPerLength=RHO_A, crossSectionInertia=RHO_I,
+            bendingStiffness=EI, axialStiffness=EA, shearStiffness=EA))
+    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+    fixed = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    for c in range(3):
+        mbs.AddObject(ObjectConnectorCoordinate(
+            markerNumbers=[fixed, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=c))]))
+    tip_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[L, 0.0, 0.0]))
+    tip = mbs.AddObject(ObjectRigidBody2D(nodeNumber=tip_node, mass=TIP_MASS, inertia=0.0))
+    mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
+        mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[-1])),
+        mbs.AddMarker(MarkerBodyPosition(bodyNumber=tip, localPosition=[0.0, 0.0, 0.0]))]))
+    mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[-1], coordinate=2)),
+        mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=tip_node, coordinate=2))]))
+    load = mbs.AddLoad(LoadForceVector(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[-1])),
+                                       loadVector=[0.0, 0.0, 0.0]))
+    pulse = CreateSymbolicUserFunction(mbs, _pulse, "loadVectorUserFunction", load)  # alive through the solve
+    mbs.SetLoadParameter(load, "loadVectorUserFunction", pulse)
+    sensor = mbs.AddSensor(SensorBody(bodyNumber=tip, outputVariableType=exu.OutputVariableType.Position,
+                                      storeInternal=True, writeToFile=False))
+    mbs.Assemble()
+    settings = exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF, sensor_period=OUTPUT, sparse=n >= 16)
+    wall, statistics = exudyn_solve(mbs, settings)
+    data = mbs.GetSensorStoredData(sensor)
+    return dict(wall_time_s=wall, f1=first_frequency(data[:, 0], data[:, 2], EXACT), **statistics)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
+    parser.add_argument("--repeats", type=int, default=2)
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+
+    factory = SceneFactory()
+    try:
+        fmus = {n: factory.fmu(tip_mass_scene(n), f"tip{n}") for n, _ in PAIRS}
+        rows = []
+        for code, model, run in ((OURS, "3D corotational beam, tip body on a fixed joint",
+                                  lambda n, h: ours(fmus[n], h)),
+                                 (EXUDYN, "BeamGeometricallyExact2D, RigidBody2D welded", exudyn_beam_2d)):
+            for n, h in PAIRS:
+                r = best_of(lambda: run(n, h), args.repeats)
+                rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"],
+                                 error=abs(r["f1"] / EXACT[0] - 1), model=model, h_s=h, f1_hz=r["f1"],
+                                 steps=r["steps"], newton_iterations=r["newton_iterations"],
+                                 factorizations=r.get("factorizations", ""),
+                                 rejected_steps=r.get("rejected_steps", "")))
+                print(f"tip mass {code:9s} n={n:4d} h={h:8.2e}  wall {r['wall_time_s']:7.3f} s  f1 {r['f1']:.7f} Hz "
+                      f"(relative error {rows[-1]['error']:8.2e})  Newton it/step "
+                      f"{r['newton_iterations'] / r['steps']:.2f}", flush=True)
+    finally:
+        factory.close()
+    csv_path = args.out / "tip_mass_precision.csv"
+    write_csv(csv_path, rows)
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    plot_precision_work(ax, rows)
+    ax.set_xlabel("wall time for 10 s simulated [s]")
+    ax.set_ylabel("relative error of the first bending frequency")
+    ax.set_title(f"Cantilever with a rigid tip body (mu = 1) on a fixed joint: f1 against {EXACT[0]:.7f} Hz\n"
+                 "(labels: elements; h = 0.04/n)", fontsize=9)
+    png = args.out / "tip_mass_precision.png"
+    save_figure(fig, png)
+    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
+
+
+if __name__ == "__main__":
+    main()
