@@ -17,6 +17,38 @@ System::System(Model model)
       flexibleInputs_(VectorXd::Zero(model_.flexible.inputCount)),
       forceInputs_(VectorXd::Zero(model_.forceInputCount)) {
   startDrives(0.0);
+  // A body moves with the rates of the joints on its path to ground.
+  const int n = model_.rigidVelocityCount;
+  std::vector<int> bodyOfColumn(n, kGroundIndex);
+  supportColumns_.resize(model_.bodies.size());
+  for (int b = 0; b < int(model_.bodies.size()); ++b) {
+    for (int at = b; at != kGroundIndex; at = model_.bodies[at].parent) {
+      const Joint& j = model_.joints[model_.bodies[at].inboardJoint];
+      for (int d = 0; d < j.dofs; ++d) supportColumns_[b].push_back(j.velocityOffset + d);
+    }
+    const Joint& own = model_.joints[model_.bodies[b].inboardJoint];
+    for (int d = 0; d < own.dofs; ++d) bodyOfColumn[own.velocityOffset + d] = b;
+  }
+  // Two rates couple in the tree's tangent (mass, and the derivatives of the
+  // joint-space forces) only when one joint is outboard of the other: the
+  // forces on a subtree depend on the poses of that subtree and its path to
+  // ground. Cut joints and force elements between two bodies couple any
+  // branches: then every pair.
+  bool branchesCoupled = false;
+  for (const Joint& j : model_.joints) branchesCoupled = branchesCoupled || j.cut;
+  for (const ForceElement& f : model_.forces)
+    branchesCoupled = branchesCoupled || (f.kind != ForceElement::Kind::AppliedForce &&
+                                          f.marker1.body != kGroundIndex && f.marker2.body != kGroundIndex);
+  auto outboardOf = [&](int inner, int outer) {
+    for (int at = outer; at != kGroundIndex; at = model_.bodies[at].parent)
+      if (at == inner) return true;
+    return false;
+  };
+  ratesCoupled_.resize(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < n; ++k)
+      ratesCoupled_(i, k) = branchesCoupled || outboardOf(bodyOfColumn[i], bodyOfColumn[k]) ||
+                            outboardOf(bodyOfColumn[k], bodyOfColumn[i]);
 }
 
 void System::startDrives(double t0) {
@@ -164,8 +196,9 @@ void System::weldForcesOnNodes(const VectorXd& lambda, VectorXd& r) const {
 }
 
 // Mass block analytic (B^T M B); velocity and configuration derivatives by
-// finite differences of the rigid residual, for now. Every entry of the
-// block is emitted, zeros included, so the sparsity pattern never changes.
+// finite differences of the rigid residual, for now. Every entry that can be
+// nonzero (ratesCoupled_) is emitted, zeros included, so the sparsity pattern
+// never changes.
 void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                           const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                           Triplets& constraintJacobian) {
@@ -173,25 +206,28 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
   forwardKinematics(model_, data_, q, v, vdot);
   if (model_.constraintCount > 0) computeVelocityTransformation(model_, data_);
   Eigen::MatrixXd S = cM * jointSpaceMassMatrix(model_, data_);
-  // Constraint rows Phi_q = Phi_Z B (dense over the joint rates: a stable pattern).
+  // Constraint rows Phi_q = Phi_Z B, over the rates that move the bodies.
   const Eigen::MatrixXd& B = data_.velocityTransformation;
   for (const Joint& j : model_.joints) {
-    if (j.driven)
-      for (int col = 0; col < n; ++col)
-        constraintJacobian.emplace_back(j.constraintOffset, col, col == j.velocityOffset ? 1.0 : 0.0);
+    if (j.driven) constraintJacobian.emplace_back(j.constraintOffset, j.velocityOffset, 1.0);
     if (!j.cut) continue;
     const int parent = j.parentMarker.body, child = j.childMarker.body;
     const ConstraintEvaluation c = evaluateJointConstraint(constraintOf(j), poseOf(data_, parent), poseOf(data_, child));
     Eigen::MatrixXd rows = c.jacobianChild * B.middleRows<6>(6 * child);
     if (parent != kGroundIndex) rows += c.jacobianParent * B.middleRows<6>(6 * parent);
-    for (int col = 0; col < n; ++col)
+    // Nonzero only in the rates that move the two bodies.
+    std::vector<int> columns = parent == kGroundIndex ? std::vector<int>() : supportColumns_[parent];
+    columns.insert(columns.end(), supportColumns_[child].begin(), supportColumns_[child].end());
+    std::sort(columns.begin(), columns.end());
+    columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
+    for (int col : columns)
       for (int i = 0; i < rows.rows(); ++i) constraintJacobian.emplace_back(j.constraintOffset + i, col, rows(i, col));
   }
   for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
     const ConstraintEvaluation c =
         evaluateJointConstraint(w.weld, poseOfNode(nodes_[w.node]), poseOf(data_, w.virtualBody));
     const Eigen::MatrixXd rows = c.jacobianChild * B.middleRows<6>(6 * w.virtualBody);
-    for (int col = 0; col < n; ++col)
+    for (int col : supportColumns_[w.virtualBody])
       for (int i = 0; i < 6; ++i) constraintJacobian.emplace_back(w.constraintOffset + i, col, rows(i, col));
   }
   if (cC != 0.0 || cK != 0.0) {
@@ -216,7 +252,8 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
     forwardKinematics(model_, data_, q, v, vdot);  // the workspace of q again, not of the last perturbation
   }
   for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) iteration.emplace_back(i, j, S(i, j));
+    for (int i = 0; i < n; ++i)
+      if (ratesCoupled_(i, j)) iteration.emplace_back(i, j, S(i, j));
 }
 
 void System::tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
@@ -238,7 +275,6 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
 // virtual body, mapped by W P (node) and B (virtual body), plus the turning
 // of the node frame in W^T: d(A^T N)/dtheta = skew(A^T N).
 void System::weldTangent(const VectorXd& lambda, double cK, Triplets& iteration, Triplets& constraintJacobian) const {
-  const int nr = model_.rigidVelocityCount;
   const Eigen::MatrixXd& B = data_.velocityTransformation;  // current: rigidTangent computed it
   for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
     const NodeState& n = nodes_[w.node];
@@ -263,7 +299,7 @@ void System::weldTangent(const VectorXd& lambda, double cK, Triplets& iteration,
       if (node.dof[k] < 0) continue;
       for (int l2 = 0; l2 < 6; ++l2)
         if (node.dof[l2] >= 0) iteration.emplace_back(node.dof[k], node.dof[l2], cK * nodeNode(k, l2));
-      for (int col = 0; col < nr; ++col) {
+      for (int col : supportColumns_[w.virtualBody]) {
         iteration.emplace_back(node.dof[k], col, cK * nodeRigid(k, col));
         iteration.emplace_back(col, node.dof[k], cK * rigidNode(col, k));
       }

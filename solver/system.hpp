@@ -77,6 +77,11 @@ class System : public Dynamics {
   std::vector<NodeState> nodes_;
   VectorXd tau_, rigid_;
   double constraintLengthScale_ = 1.0;  // of the last residual
+  // Sparsity of the rigid tangent: the joint rates that move each body (its
+  // path to ground), and which pairs of rates can couple at all (see the
+  // constructor). Fixed by the topology, so the pattern never changes.
+  std::vector<std::vector<int>> supportColumns_;
+  Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> ratesCoupled_;
 };
 
 }  // namespace mfbd

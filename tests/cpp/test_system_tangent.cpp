@@ -197,3 +197,79 @@ TEST(ScaledNewtonMatrix, ConditionNumberStaysBoundedAsTheStepShrinks) {
   for (double c : condition) EXPECT_LT(c, 10.0 * condition.back());
   EXPECT_LT(condition.back(), 1e9);  // finite: massless virtual bodies do not make it singular
 }
+
+// A tree without cut joints or two-body force elements: the rigid tangent is
+// emitted only for rates of which one is outboard of the other, and rows only
+// over the rates that move their bodies. The dropped entries must really be
+// zero: the whole tangent against finite differences, row by row.
+TEST(SparseRigidTangent, TreeWithWeldedBeamMatchesFiniteDifferences) {
+  const char* scene = R"({
+    "format": "mfbd-scene/1", "name": "arm", "gravity": [0, -9.81, 0],
+    "bodies": [
+      {"name": "upper", "mass": 2.0, "inertia": [0.01, 0.05, 0.05], "position": [0.25, 0, 0]},
+      {"name": "hub", "mass": 0.5, "inertia": [0.02, 0.02, 0.03], "position": [0.5, 0, 0]},
+      {"name": "payload", "mass": 0.5, "inertia": [2e-4, 3e-4, 4e-4], "position": [1.1, 0, 0.05]},
+      {"name": "side", "mass": 1.0, "inertia": [0.01, 0.02, 0.03], "position": [0, -0.3, 0]}
+    ],
+    "joints": [
+      {"name": "shoulder", "type": "revolute", "parent": "ground", "child": "upper", "position": [0, 0, 0]},
+      {"name": "elbow", "type": "universal", "parent": "upper", "child": "hub", "position": [0.5, 0, 0],
+       "axis": [0.2, 0, 1]},
+      {"name": "clamp", "type": "fixed", "parent": "hub", "child": {"flexible": "arm", "node": 0}},
+      {"name": "grip", "type": "spherical", "parent": {"flexible": "arm", "node": 3}, "child": "payload"},
+      {"name": "swing", "type": "revolute", "parent": "ground", "child": "side", "position": [0, -0.1, 0],
+       "axis": [1, 0, 0]}
+    ],
+    "flexible_bodies": [
+      {"name": "arm", "beam": {"start": [0.5, 0, 0], "end": [1.1, 0, 0], "elements": 3, "section_y": [0, 1, 0]},
+       "section": {"EA": 1e4, "GAy": 5e3, "GAz": 5e3, "GJ": 20, "EIy": 30, "EIz": 40, "rhoA": 2,
+                   "rhoJ": [0.02, 0.01, 0.01]}, "damping": 0.01}
+    ]
+  })";
+  System system(assemble(parseScene(scene)));
+  const int n = system.velocityCount(), m = system.constraintCount();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto random = [&](int size, double scale) {
+    VectorXd x(size);
+    for (int i = 0; i < size; ++i) x[i] = scale * u(rng);
+    return x;
+  };
+  Configuration q = system.model().initialConfiguration;
+  system.retract(q, random(n, 0.2));
+  const VectorXd v = random(n, 1.0), vdot = random(n, 1.0), lambda = random(m, 10.0);
+  const double t = 0.2, eps = 1e-6;
+  for (const auto& [cC, cK] : {std::pair{0.0, 1.0}, std::pair{1.0, 0.0}}) {
+    Triplets iteration, jacobian;
+    system.tangent(t, q, v, vdot, lambda, 0.0, cC, cK, iteration, jacobian);
+    const Eigen::MatrixXd S = dense(iteration, n, n), G = dense(jacobian, m, n);
+    Eigen::MatrixXd Sfd(n, n), Gfd(m, n);
+    for (int i = 0; i < n; ++i) {
+      Configuration qp = q, qm = q;
+      VectorXd vp = v, vm = v, d = VectorXd::Zero(n);
+      d[i] = eps;
+      if (cK != 0.0) {
+        system.retract(qp, d);
+        system.retract(qm, -d);
+      } else {
+        vp[i] += eps;
+        vm[i] -= eps;
+      }
+      const Evaluation p = evaluate(system, t, qp, vp, vdot, lambda), mm = evaluate(system, t, qm, vm, vdot, lambda);
+      Sfd.col(i) = (p.r - mm.r) / (2 * eps);
+      Gfd.col(i) = (p.phi - mm.phi) / (2 * eps);
+    }
+    for (int i = 0; i < n; ++i)
+      EXPECT_LT((S - Sfd).row(i).cwiseAbs().maxCoeff(), 1e-5 * std::max(1.0, Sfd.row(i).cwiseAbs().maxCoeff()))
+          << "row " << i << (cK != 0.0 ? " of K" : " of C");
+    if (cK != 0.0) EXPECT_LT((G - Gfd).cwiseAbs().maxCoeff(), 1e-7 * std::max(1.0, Gfd.cwiseAbs().maxCoeff()));
+  }
+  // The side pendulum's rate couples with nothing in the arm's tree.
+  Triplets iteration, jacobian;
+  system.tangent(t, q, v, vdot, lambda, 1.0, 1.0, 1.0, iteration, jacobian);
+  const int side = system.model().joints[findJoint(system.model(), "swing")].velocityOffset;
+  const int shoulder = system.model().joints[findJoint(system.model(), "shoulder")].velocityOffset;
+  bool coupled = false;
+  for (const auto& e : iteration) coupled = coupled || (e.row() == side && e.col() == shoulder);
+  EXPECT_FALSE(coupled);
+}
