@@ -1,12 +1,17 @@
 """Shared by the example scripts: a CSV of named columns and a figure of
-panels over time, both under an output folder."""
+panels over time, both under an output folder; an FMU instance for a master
+loop."""
+import contextlib
 import pathlib
+import shutil
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from fmpy import extract, read_model_description  # noqa: E402
+from fmpy.fmi2 import FMU2Slave  # noqa: E402
 
 
 def save_table(path: pathlib.Path, columns: dict) -> None:
@@ -32,3 +37,24 @@ def save_figure(path: pathlib.Path, t, panels: list, title: str) -> None:
     fig.savefig(path, dpi=110)
     plt.close(fig)
     print(f"wrote {path.resolve()}")
+
+
+@contextlib.contextmanager
+def running_fmu(fmu_path, instance_name="master"):
+    """An initialized FMU instance at t = 0 for a master loop, and its value
+    references by name; terminated, freed and unpacked away afterwards."""
+    md = read_model_description(str(fmu_path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzip = extract(str(fmu_path))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName=instance_name)
+    try:
+        fmu.instantiate()
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.exitInitializationMode()
+        yield fmu, vr
+        fmu.terminate()
+    finally:
+        fmu.freeInstance()
+        shutil.rmtree(unzip, ignore_errors=True)

@@ -9,15 +9,12 @@ rigid links would put it shows the flexible motion. Writes a CSV and a plot.
 """
 import argparse
 import pathlib
-import shutil
 import sys
 
 import numpy as np
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
-from plotting import save_figure, save_table  # noqa: E402
+from plotting import running_fmu, save_figure, save_table  # noqa: E402
 
 L1, L2, M1, MH, MP, G = 0.5, 0.6, 2.0, 0.5, 0.5, 9.81
 M2 = 2700 * np.pi * 0.006 ** 2 * L2  # forearm mass (aluminium rod, 12 mm)
@@ -39,19 +36,10 @@ def gravity_torque(q):
 
 
 def run(fmu_path, stop=3.0, step=1e-3):
-    md = read_model_description(str(fmu_path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    unzip = extract(str(fmu_path))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                    instanceName="arm")
-    angles, rates = [vr["shoulder.angle"], vr["elbow.angle"]], [vr["shoulder.angle_rate"], vr["elbow.angle_rate"]]
-    torques = [vr["shoulder.torque"], vr["elbow.torque"]]
-    payload = [vr["payload.position.x"], vr["payload.position.y"]]
-    try:
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        fmu.exitInitializationMode()
+    with running_fmu(fmu_path, "arm") as (fmu, vr):
+        angles, rates = [vr["shoulder.angle"], vr["elbow.angle"]], [vr["shoulder.angle_rate"], vr["elbow.angle_rate"]]
+        torques = [vr["shoulder.torque"], vr["elbow.torque"]]
+        payload = [vr["payload.position.x"], vr["payload.position.y"]]
         t, rows = 0.0, []
         while t < stop - 1e-12:
             q, qd = np.array(fmu.getReal(angles)), np.array(fmu.getReal(rates))
@@ -63,10 +51,6 @@ def run(fmu_path, stop=3.0, step=1e-3):
             rigid = np.array([L1 * np.cos(q[0]) + L2 * np.cos(q[0] + q[1]), L1 * np.sin(q[0]) + L2 * np.sin(q[0] + q[1])])
             rows.append([t, *q, *reference(t), *tau, np.linalg.norm(np.array(fmu.getReal(payload)) - rigid)])
         return np.array(rows)
-    finally:
-        fmu.terminate()
-        fmu.freeInstance()
-        shutil.rmtree(unzip, ignore_errors=True)
 
 
 def main():

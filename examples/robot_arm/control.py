@@ -7,12 +7,12 @@ step, read the joint angles and rates. Writes a CSV and a plot.
 """
 import argparse
 import pathlib
-import shutil
 import sys
 
 import numpy as np
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+from plotting import running_fmu  # noqa: E402
 
 TARGET = np.array([0.8, -0.6, 1.0, 0.3, -0.5, 0.7])  # rad, from the design configuration
 # Gains per joint: explicit feedback over a communication step dt is stable
@@ -22,19 +22,10 @@ KP, KD = np.array([400, 900, 500, 4, 20, 1.0]), np.array([60, 120, 60, 0.5, 2, 0
 
 
 def run(fmu_path, stop=3.0, step=1e-3, gravity_probe=1e-6):
-    md = read_model_description(str(fmu_path))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    unzip = extract(str(fmu_path))
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier,
-                    instanceName="arm")
-    angles = [vr[f"j{i}.angle"] for i in range(1, 7)]
-    rates = [vr[f"j{i}.angle_rate"] for i in range(1, 7)]
-    torques = [vr[f"j{i}.torque"] for i in range(1, 7)]
-    try:
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        fmu.exitInitializationMode()
+    with running_fmu(fmu_path, "arm") as (fmu, vr):
+        angles = [vr[f"j{i}.angle"] for i in range(1, 7)]
+        rates = [vr[f"j{i}.angle_rate"] for i in range(1, 7)]
+        torques = [vr[f"j{i}.torque"] for i in range(1, 7)]
         t, rows = 0.0, []
         while t < stop - 1e-12:
             q, qd = np.array(fmu.getReal(angles)), np.array(fmu.getReal(rates))
@@ -44,10 +35,6 @@ def run(fmu_path, stop=3.0, step=1e-3, gravity_probe=1e-6):
             t += step
             rows.append([t, *fmu.getReal(angles), *tau])
         return np.array(rows)
-    finally:
-        fmu.terminate()
-        fmu.freeInstance()
-        shutil.rmtree(unzip, ignore_errors=True)
 
 
 def main():

@@ -81,6 +81,30 @@ def fitted_frequencies(t, y, guesses):
     return fit.x
 
 
+def released_response(fmu, outputs, hold=3.0, record=6.0, h=0.01):
+    """Runs the FMU while its loads (scaled off at `hold`) and the beam's
+    tunable damping settle it, switches the damping off at `hold`, and records
+    `outputs` for `record` seconds of free response: (times, {name: values})."""
+    s = Slave(fmu)
+    try:
+        s.start()
+        t = 0.0
+        for _ in range(int(round(hold / h))):
+            assert s.step(t, h) == 0
+            t += h
+        assert s.set("beam.damping", 0.0) == 0
+        ts, values = [], {name: [] for name in outputs}
+        for _ in range(int(round(record / h))):
+            assert s.step(t, h) == 0
+            t += h
+            ts.append(t)
+            for name in outputs:
+                values[name].append(s.get(name))
+    finally:
+        s.free()
+    return np.array(ts), {name: np.array(v) for name, v in values.items()}
+
+
 def free_vibration_frequency(tmp_path, n, beta_l):
     """Loads M phi (a static deflection in the mode's shape), released at
     t = 3 s; damping (tunable) holds until then. The frequency of that mode
@@ -94,22 +118,8 @@ def free_vibration_frequency(tmp_path, n, beta_l):
                       "scale": "if(3 - t, 1, 0)"} for i in range(1, n + 1)]
     body["damping"] = 0.3
     scene["solver"] = {"h_max": 1e-3, "rho_inf": 0.9}
-    s = Slave(packed(scene, tmp_path, f"vibration{n}"))
-    try:
-        s.start()
-        t, h = 0.0, 0.01
-        for _ in range(300):
-            assert s.step(t, h) == 0
-            t += h
-        assert s.set("beam.damping", 0.0) == 0
-        ys, ts = [], []
-        for _ in range(int(round(6.0 / h))):
-            assert s.step(t, h) == 0
-            t += h
-            ts.append(t)
-            ys.append(s.get(f"beam.node{n}.position.y"))
-    finally:
-        s.free()
+    ts, out = released_response(packed(scene, tmp_path, f"vibration{n}"), [f"beam.node{n}.position.y"])
+    ys = out[f"beam.node{n}.position.y"]
     guesses = np.array([1.875104, 4.694091]) ** 2 / (2 * np.pi)
     f = fitted_frequencies(np.array(ts), np.array(ys), guesses)
     return f[0] if beta_l < 2 else f[1]
