@@ -16,8 +16,9 @@ for study in peer_r1_pendulum peer_f1_end_moment peer_f3_vibration peer_f4_spin_
              peer_f4_motor peer_f5_slider_crank peer_f6_four_bar peer_tip_mass; do
   .venv/bin/python "benchmarks/$study.py" --out "$out"
 done
-# Rigid reference problems R2-R5 (issue 3).
-for study in peer_r2_double_pendulum peer_r3_n_four_bar peer_r4_bricard peer_r5_slider_crank; do
+# Rigid reference problems R2-R6 (issue 3).
+for study in peer_r2_double_pendulum peer_r3_n_four_bar peer_r4_bricard peer_r5_slider_crank \
+             peer_r6_flyball_governor; do
   .venv/bin/python "benchmarks/$study.py" --out "$out"
 done
 .venv/bin/python benchmarks/peer_summary.py --out "$out"
