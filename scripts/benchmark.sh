@@ -4,7 +4,7 @@
 # (peer_*.py, Exudyn from benchmarks/requirements.txt; the rigid + flexible ones
 # of issue 5 after the flexible ones) and the wall time at matched error
 # (peer_summary.py -> peer_summary.csv); then the per-step cost studies
-# (C++ drivers). About 9 minutes on 2 cores (see benchmarks/README.md).
+# (C++ drivers). About 12 minutes on 2 cores (see benchmarks/README.md).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/setup.sh"
