@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Wall time at matched error, from the CSVs of the peer studies
 (peer_r1_pendulum.py, peer_f1_end_moment.py, peer_f3_vibration.py,
-peer_f4_spin_up.py, and the rigid + flexible ones of issue 5:
+peer_f4_spin_up.py, the rigid + flexible ones of issue 5:
 peer_f4_motor.py, peer_f5_slider_crank.py, peer_f6_four_bar.py,
-peer_tip_mass.py): for each problem, metric and error level, the cheapest
+peer_tip_mass.py, and the rigid ones of issue 3: peer_r2_double_pendulum.py,
+peer_r3_n_four_bar.py, peer_r4_bricard.py, peer_r5_slider_crank.py,
+peer_r6_flyball_governor.py): for each problem, metric and error level, the cheapest
 run of each code and model that reached the level (no interpolation), and
 the ratio of our wall time to the fastest Exudyn model's. Writes
 peer_summary.csv and prints the same as a Markdown table.
@@ -17,6 +19,17 @@ from peer_common import EXUDYN, OURS, cheapest_at, read_csv, series_label
 # problem -> (csv, [(metric column, description, error levels)])
 STUDIES = {
     "R1 pendulum": ("r1_pendulum_precision.csv", [("error", "bob position at 10 s [m]", [1e-3, 1e-4, 1e-5, 1e-6, 1e-7])]),
+    "R2 double pendulum": ("r2_double_pendulum_precision.csv",
+                           [("error", "energy drift over 10 s [m g L]", [1e-2, 1e-3, 1e-4, 1e-5])]),
+    "R3 N-four-bar (0-0.6 s)": ("r3_n_four_bar_precision.csv",
+                                [("error", "crank angle, max over 0-0.6 s [rad]", [1e-4, 1e-5, 1e-6, 1e-7]),
+                                 ("energy_drift", "energy drift [m g L]", [1e-3, 1e-4, 1e-5, 1e-6])]),
+    "R4 Bricard": ("r4_bricard_precision.csv", [("error", "energy drift over 10 s [m g L]", [1e-5, 1e-6, 1e-7])]),
+    "R5 slider-crank": ("r5_slider_crank_precision.csv",
+                        [("error", "slider position [m]", [1e-12]),
+                         ("velocity_error", "slider velocity [m/s]", [1e-3, 1e-4, 1e-5, 1e-6])]),
+    "R6 flyball governor": ("r6_flyball_governor_precision.csv",
+                            [("error", "slider position, max over 10 s [m]", [1e-3, 1e-4, 1e-5])]),
     "F1 end moment": ("f1_end_moment_precision.csv", [("error", "tip position [m]", [1e-3, 1e-4, 1e-5])]),
     "F3 vibration": ("f3_vibration_precision.csv", [("error", "f1, relative", [1e-2, 2e-3, 5e-4])]),
     "F4 spin-up": ("f4_spin_up_precision.csv", [("error", "tip deflection at 7 s [m]", [1e-2, 1e-3, 1e-4]),

@@ -4,7 +4,7 @@
 # (peer_*.py, Exudyn from benchmarks/requirements.txt; the rigid + flexible ones
 # of issue 5 after the flexible ones) and the wall time at matched error
 # (peer_summary.py -> peer_summary.csv); then the per-step cost studies
-# (C++ drivers). About 9 minutes on 2 cores (see benchmarks/README.md).
+# (C++ drivers). About 12 minutes on 2 cores (see benchmarks/README.md).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/setup.sh"
@@ -16,10 +16,17 @@ for study in peer_r1_pendulum peer_f1_end_moment peer_f3_vibration peer_f4_spin_
              peer_f4_motor peer_f5_slider_crank peer_f6_four_bar peer_tip_mass; do
   .venv/bin/python "benchmarks/$study.py" --out "$out"
 done
+# Rigid reference problems R2-R6 (issue 3).
+for study in peer_r2_double_pendulum peer_r3_n_four_bar peer_r4_bricard peer_r5_slider_crank \
+             peer_r6_flyball_governor; do
+  .venv/bin/python "benchmarks/$study.py" --out "$out"
+done
 .venv/bin/python benchmarks/peer_summary.py --out "$out"
 # Per-step cost of the flexible mesh against element count (C++ driver, built here),
 # alone and with rigid bodies attached.
 .venv/bin/python benchmarks/flexible_cost.py --out "$out"
 .venv/bin/python benchmarks/coupled_cost.py --phases --out "$out"
-# Per-step cost of a rigid pendulum chain against the number of bodies (C++ driver, built here).
+# Per-step cost of a rigid pendulum chain against the number of bodies (C++ driver, built here),
+# then the same chain through the FMU beside Exudyn's KinematicTree.
 .venv/bin/python benchmarks/chain_cost.py --out "$out"
+.venv/bin/python benchmarks/peer_chain_cost.py --out "$out"
