@@ -77,6 +77,24 @@ class FmuRun:
         self.slave.free()
         shutil.rmtree(unzip, ignore_errors=True)
 
+    def sample(self, names, stop, output):
+        """Initializes, steps to `stop` by `output`, reading `names` at every
+        communication point (t = 0 included), and frees the instance.
+        Returns (samples as an array, wall time of the run, statistics)."""
+        samples = []
+        try:
+            start = time.perf_counter()
+            self.initialize()
+            samples.append(self.get(*names))
+            for _ in range(int(round(stop / output))):
+                self.step(output)
+                samples.append(self.get(*names))
+            wall = time.perf_counter() - start
+            statistics = self.statistics()
+        finally:
+            self.free()
+        return np.array(samples), wall, statistics
+
 
 class SceneFactory:
     """Packs scene variants into FMUs (build/mfbd-pack) in one temporary folder."""

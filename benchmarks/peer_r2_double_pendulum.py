@@ -31,7 +31,6 @@ Writes r2_double_pendulum_precision.csv and .png.
 """
 import argparse
 import pathlib
-import time
 
 import numpy as np
 
@@ -70,19 +69,7 @@ def ours(fmu, h):
     run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF})
     names = [f"bar{i}.{q}.{c}" for i in (1, 2) for q in ("position", "velocity") for c in "xy"]
     names += ["bar1.angular_velocity.z", "bar2.angular_velocity.z", "shoulder.angle", "elbow.angle"]
-    samples = []
-    try:
-        start = time.perf_counter()
-        run.initialize()
-        samples.append(run.get(*names))
-        for _ in range(int(round(STOP / OUTPUT))):
-            run.step(OUTPUT)
-            samples.append(run.get(*names))
-        wall = time.perf_counter() - start
-        statistics = run.statistics()
-    finally:
-        run.free()
-    s = np.array(samples)
+    s, wall, statistics = run.sample(names, STOP, OUTPUT)
     p = s[:, [0, 1, 4, 5]].reshape(-1, 2, 2)
     v = s[:, [2, 3, 6, 7]].reshape(-1, 2, 2)
     angle = np.column_stack([s[:, 10], s[:, 10] + s[:, 11]])

@@ -38,7 +38,6 @@ Writes r3_n_four_bar_precision.csv and .png.
 import argparse
 import importlib.util
 import pathlib
-import time
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -111,19 +110,8 @@ def ours(fmu, h, stop=STOP):
     names = [f"{b}.{q}" for b in body_names()
              for q in ("position.x", "position.y", "velocity.x", "velocity.y", "angular_velocity.z",
                        "orientation.w", "orientation.z")]
-    samples = []
-    try:
-        start = time.perf_counter()
-        run.initialize()
-        samples.append(run.get(*names))
-        for _ in range(int(round(stop / OUTPUT))):
-            run.step(OUTPUT)
-            samples.append(run.get(*names))
-        wall = time.perf_counter() - start
-        statistics = run.statistics()
-    finally:
-        run.free()
-    s = np.array(samples).reshape(len(samples), 2 * N + 1, 7)
+    s, wall, statistics = run.sample(names, stop, OUTPUT)
+    s = s.reshape(len(s), 2 * N + 1, 7)
     angle = 2 * np.arctan2(s[:, :, 6], s[:, :, 5])  # planar rotation about z from the quaternion
     return dict(wall_time_s=wall, **metrics(s[:, :, 0:2], s[:, :, 2:4], s[:, :, 4], angle), **statistics)
 

@@ -34,7 +34,6 @@ Writes r4_bricard_precision.csv and .png.
 """
 import argparse
 import pathlib
-import time
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -107,19 +106,7 @@ def ours(fmu, h):
     rods = [f"rod{i}" for i in range(1, 6)]
     names = [f"{b}.{q}.{c}" for b in rods for q in ("position", "velocity", "angular_velocity") for c in "xyz"]
     names += [f"{b}.orientation.{c}" for b in rods for c in "xyzw"]
-    samples = []
-    try:
-        start = time.perf_counter()
-        run.initialize()
-        samples.append(run.get(*names))
-        for _ in range(int(round(STOP / OUTPUT))):
-            run.step(OUTPUT)
-            samples.append(run.get(*names))
-        wall = time.perf_counter() - start
-        statistics = run.statistics()
-    finally:
-        run.free()
-    s = np.array(samples)
+    s, wall, statistics = run.sample(names, STOP, OUTPUT)
     kinematics = s[:, :45].reshape(len(s), 5, 3, 3)  # sample, rod, quantity, xyz
     R = Rotation.from_quat(s[:, 45:].reshape(-1, 4)).as_matrix().reshape(len(s), 5, 3, 3)
     return dict(wall_time_s=wall, **metrics(kinematics[:, :, 0], kinematics[:, :, 1], R, kinematics[:, :, 2]),

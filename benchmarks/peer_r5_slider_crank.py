@@ -29,7 +29,6 @@ Writes r5_slider_crank_precision.csv and .png.
 """
 import argparse
 import pathlib
-import time
 
 import numpy as np
 
@@ -74,19 +73,7 @@ def metrics(t, x, v):
 def ours(fmu, h):
     run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF})
     names = ["slider.position.x", "slider.velocity.x"]
-    samples = []
-    try:
-        start = time.perf_counter()
-        run.initialize()
-        samples.append(run.get(*names))
-        for _ in range(int(round(STOP / OUTPUT))):
-            run.step(OUTPUT)
-            samples.append(run.get(*names))
-        wall = time.perf_counter() - start
-        statistics = run.statistics()
-    finally:
-        run.free()
-    s = np.array(samples)
+    s, wall, statistics = run.sample(names, STOP, OUTPUT)
     t = OUTPUT * np.arange(len(s))
     return dict(wall_time_s=wall, **metrics(t, s[:, 0], s[:, 1]), **statistics)
 

@@ -31,7 +31,6 @@ Writes r6_flyball_governor_precision.csv and .png.
 import argparse
 import math
 import pathlib
-import time
 
 import numpy as np
 
@@ -54,19 +53,7 @@ RHO_INF = 0.8
 def ours(fmu, h):
     run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF})
     names = ["guide.position", "hinge1.angle"]
-    samples = []
-    try:
-        start = time.perf_counter()
-        run.initialize()
-        samples.append(run.get(*names))
-        for _ in range(int(round(STOP / OUTPUT))):
-            run.step(OUTPUT)
-            samples.append(run.get(*names))
-        wall = time.perf_counter() - start
-        statistics = run.statistics()
-    finally:
-        run.free()
-    s = np.array(samples)
+    s, wall, statistics = run.sample(names, STOP, OUTPUT)
     return dict(wall_time_s=wall, slider=s[:, 0], hinge=s[:, 1], **statistics)
 
 
