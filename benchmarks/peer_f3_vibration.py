@@ -139,7 +139,7 @@ def main():
     try:
         fmus = {n: factory.fmu(vibration_scene(n), f"vibration{n}") for n, _ in PAIRS}
         rows = []
-        for code, model, run in ((OURS, "3D corotational beam, lumped inertia", lambda n, h: ours(fmus[n], n, h)),
+        for code, model, run in ((OURS, "3D corotational beam, consistent translational mass", lambda n, h: ours(fmus[n], n, h)),
                                  (EXUDYN, "BeamGeometricallyExact2D", exudyn_beam_2d)):
             for n, h in PAIRS:
                 r = best_of(lambda: run(n, h), args.repeats)

@@ -180,7 +180,7 @@ def main():
               f"{reference_rows[-1]['tip_deflection_7s_m']:.9f} m", flush=True)
 
         rows = []
-        for code, model, run in ((OURS, "3D corotational beam, lumped inertia",
+        for code, model, run in ((OURS, "3D corotational beam, consistent translational mass",
                                   lambda n, h: ours(fmus[n], n, h, STOP)),
                                  (EXUDYN, "BeamGeometricallyExact2D", lambda n, h: exudyn_beam_2d(n, h, STOP))):
             for n, h in PAIRS:
