@@ -222,12 +222,12 @@ TEST(RecursiveNewtonMatrix, DampingAndStiffnessMatchTheJointSpaceWhereBIsNotLoad
 }
 
 TEST(RecursiveNewtonMatrix, ChainRunReachesTheJointSpaceAnswer) {
-  // A 40-bar pendulum chain released from horizontal (automatic choice: the
+  // A 60-bar pendulum chain released from horizontal (automatic choice: the
   // recursive form) against the joint-space form over 0.5 s: the same
   // motion to the Newton tolerance's accumulation, with at most 30 % more
   // Newton iterations (the neglected terms are O(h omega)), and no
   // rejected substep.
-  const int n = 40;
+  const int n = 60;
   std::ostringstream s;
   s.precision(17);
   s << R"({"format": "mfbd-scene/1", "name": "chain", "gravity": [0, -9.81, 0], "bodies": [)";
@@ -247,8 +247,11 @@ TEST(RecursiveNewtonMatrix, ChainRunReachesTheJointSpaceAnswer) {
   std::string message;
   ASSERT_TRUE(automatic.initialize(0.0, message)) << message;
   ASSERT_TRUE(joint.initialize(0.0, message)) << message;
-  // Consistent accelerations come from the mass block alone: identical.
-  EXPECT_LT((automatic.state().vdot - joint.state().vdot).cwiseAbs().maxCoeff(), 1e-9);
+  // Consistent accelerations come from the mass block alone: the same to
+  // the round-off of two factorizations of a chain's ill-conditioned mass
+  // matrix (measured 1.5e-10 relative).
+  const double vdotScale = joint.state().vdot.cwiseAbs().maxCoeff();
+  EXPECT_LT((automatic.state().vdot - joint.state().vdot).cwiseAbs().maxCoeff(), 1e-9 * vdotScale) << vdotScale;
   for (int k = 0; k < 50; ++k) {
     ASSERT_TRUE(automatic.doStep(0.01).ok);
     ASSERT_TRUE(joint.doStep(0.01).ok);
