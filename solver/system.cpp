@@ -97,6 +97,7 @@ void System::endStep(double t) {
 void System::jointForces(const Configuration& q, const VectorXd& v, VectorXd& tau) const {
   tau.setZero(model_.rigidVelocityCount);
   for (const Joint& j : model_.joints) {
+    if (j.cut) continue;  // no coordinates of its own (its offsets are not rates)
     auto t = tau.segment(j.velocityOffset, j.dofs);
     t = -(j.damping + j.springDamping) * v.segment(j.velocityOffset, j.dofs);
     if (j.springStiffness != 0.0) t[0] -= j.springStiffness * (q.scalars[j.scalarOffset] - j.springFreeCoordinate);
@@ -306,11 +307,12 @@ void System::constraintJacobian(double t, const Configuration& q, const VectorXd
 }
 
 int System::auxiliaryCount(double cM) const {
-  return recursiveMatrix_ && cM != 0.0 ? 12 * int(model_.bodies.size()) : 0;
+  return recursiveMatrix_ && cM != 0.0 ? 18 * int(model_.bodies.size()) : 0;
 }
 
-// Body by body from the leaves in, each body's velocity variation pivoting
-// on its recursion row (unit pivot), its wrench on its balance row (unit),
+// Body by body from the leaves in, each body's acceleration and velocity
+// variations pivoting on their recursion rows (unit pivots), its wrench on
+// its balance row (unit),
 // then its joint rates on their own rows (the articulated inertia S^T H S
 // by then): the elimination of the articulated-body recursion, no fill
 // beyond each body's parent. Multipliers and flexible DOFs follow.
@@ -318,6 +320,7 @@ std::vector<std::pair<int, int>> System::pivotOrder(double cM) const {
   std::vector<std::pair<int, int>> order;
   if (auxiliaryCount(cM) == 0) return order;
   for (int i = int(model_.bodies.size()) - 1; i >= 0; --i) {
+    for (int d = 0; d < 6; ++d) order.emplace_back(accelerationUnknown(i) + d, accelerationUnknown(i) + d);
     for (int d = 0; d < 6; ++d) order.emplace_back(wrenchUnknown(i) + d, bodyUnknown(i) + d);
     for (int d = 0; d < 6; ++d) order.emplace_back(bodyUnknown(i) + d, wrenchUnknown(i) + d);
     const Joint& jt = model_.joints[model_.bodies[i].inboardJoint];
@@ -347,22 +350,25 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
 
 // The recursive formulation's own Newton matrix, sparse and O(n) for a tree
 // of n bodies where the joint-space B^T M B is dense (a chain). Besides the
-// joint-rate corrections x it carries, per body, the variation y of its
-// [velocity; angular velocity] (world, centre of mass) and the variation z
-// of the wrench its inboard joint passes to its subtree:
-//   x rows:  A x + S^T z                     = r     (A: joint springs, dampers)
-//   y rows:  H y - (I - P)^T z + Phi_Z^T dl  = 0     (subtree wrench balance)
-//   z rows:  S x - (I - P) y                 = 0     (y = T y_parent + S x)
-// with T the rigid transfer from the parent's centre of mass and H the
-// body-level tangent cM M + cC C + cK K. Eliminating y and z leaves
-// A + B^T H B: the mass block B^T M B exactly (so consistent accelerations,
-// velocity jumps and the leading term of Newton's matrix are those of the
-// joint-space form), damping and stiffness of inertia, force elements and
-// cut joints at body level. Left out: the variation of B itself (dB/dq of
-// the transmitted wrenches, the Coriolis part of Bdot qdot), terms of
-// relative size h omega and h^2 |f| / (m L): Newton converges linearly
-// rather than quadratically there, to the same answer (the residual is
-// exact). Statics (cM = 0) has only such terms: it uses the joint space.
+// joint-rate corrections x it carries, per body, the variations y of its
+// pose and velocity ([dr; dphi], world, centre of mass: velocity
+// variations are cC y), w of its acceleration, and z of the wrench its
+// inboard joint passes to its subtree:
+//   x rows:  A x + S^T z                                   = r
+//   y rows:  cM M w + H y - (I - P)^T z + Phi_Z^T dl        = 0  (wrench balance)
+//   z rows:  S x - (I - P) y                               = 0  (y = T y_parent + S x)
+//   w rows:  S x - (I - P) w + cC (D_p y_parent + D_x x)   = 0  (accelerations)
+// with T the rigid transfer from the parent's centre of mass, A the joint
+// springs and dampers, H = cC C + cK K of inertia (gyroscopic), force
+// elements and cut joints at body level, and D the derivatives of the
+// acceleration recursion's rate terms (Coriolis, centripetal) with respect
+// to the parent's velocity and the joint rates. Eliminating y, w and z
+// leaves A + B^T (cM M (B + cC dBias) + H B): the mass and damping blocks
+// of the joint-space form exactly; of the stiffness it leaves out the
+// variation of B with the configuration (dB/dq acting on the transmitted
+// wrenches and accelerations), of relative size h^2 |f| / (m L): Newton
+// converges linearly there, to the same answer (the residual is exact).
+// Statics (cM = 0) has only such terms: it uses the joint space.
 void System::recursiveTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                               const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                               Triplets& constraintJacobian) {
@@ -392,18 +398,24 @@ void System::recursiveTangent(const Configuration& q, const VectorXd& v, const V
     // d(J alpha + w x J w)/dphi, J = A J0 A^T turned by dphi.
     const Mat3 turning =
         J * skew(k.angularAcceleration) - skew(J * k.angularAcceleration) + skew(w) * (J * skew(w) - skew(J * w));
-    // H = [cM m I, 0; 0, cM J + cC gyroscopic + cK turning].
-    for (int d = 0; d < 3; ++d) iteration.emplace_back(bodyUnknown(i) + d, bodyUnknown(i) + d, cM * b.mass);
-    corner(bodyUnknown(i) + 3, bodyUnknown(i) + 3, cM * J + cC * gyroscopic + cK * turning);
+    // cM M on the acceleration; cC gyroscopic + cK turning on the pose.
+    for (int d = 0; d < 3; ++d) iteration.emplace_back(bodyUnknown(i) + d, accelerationUnknown(i) + d, cM * b.mass);
+    corner(bodyUnknown(i) + 3, accelerationUnknown(i) + 3, cM * J);
+    corner(bodyUnknown(i) + 3, bodyUnknown(i) + 3, cC * gyroscopic + cK * turning);
     diagonal(bodyUnknown(i), wrenchUnknown(i), -1.0);
     diagonal(wrenchUnknown(i), bodyUnknown(i), -1.0);
+    diagonal(accelerationUnknown(i), accelerationUnknown(i), -1.0);
+    const BiasRateDerivatives D = biasRateDerivatives(model_, data_, q, v, i);
     if (b.parent != kGroundIndex) {
-      // T = [I, -skew(dr); 0, I]: v_i = v_p + w_p x dr.
+      // T = [I, -skew(dr); 0, I]: v_i = v_p + w_p x dr, and so for accelerations.
       const Mat3 lever = -skew(k.position - data_.body[b.parent].position);
       diagonal(wrenchUnknown(i), bodyUnknown(b.parent), 1.0);
       corner(wrenchUnknown(i), bodyUnknown(b.parent) + 3, lever);
       diagonal(bodyUnknown(b.parent), wrenchUnknown(i), 1.0);
       corner(bodyUnknown(b.parent) + 3, wrenchUnknown(i), lever.transpose());
+      diagonal(accelerationUnknown(i), accelerationUnknown(b.parent), 1.0);
+      corner(accelerationUnknown(i), accelerationUnknown(b.parent) + 3, lever);
+      block(accelerationUnknown(i), bodyUnknown(b.parent), cC * D.parent);
     }
     const Joint& jt = model_.joints[b.inboardJoint];
     const Matrix6X& S = data_.joint[b.inboardJoint].motionSubspace;
@@ -411,6 +423,7 @@ void System::recursiveTangent(const Configuration& q, const VectorXd& v, const V
       const int x = jt.velocityOffset + d;
       for (int r = 0; r < 6; ++r) {
         iteration.emplace_back(wrenchUnknown(i) + r, x, S(r, d));
+        iteration.emplace_back(accelerationUnknown(i) + r, x, S(r, d) + cC * D.rates(r, d));
         iteration.emplace_back(x, wrenchUnknown(i) + r, S(r, d));
       }
       // Joint springs and dampers act on the joint's own rates.

@@ -44,7 +44,7 @@ class System : public Dynamics {
   void tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian) override;
   // Auxiliary unknowns of the recursive Newton matrix (see recursiveTangent):
-  // 12 per body, in dynamics (cM != 0) when the model uses that form.
+  // 18 per body, in dynamics (cM != 0) when the model uses that form.
   int auxiliaryCount(double cM) const override;
   bool recursiveNewtonMatrix() const { return recursiveMatrix_; }
   std::vector<std::pair<int, int>> pivotOrder(double cM) const override;
@@ -79,10 +79,12 @@ class System : public Dynamics {
   void forceElementTangent(double cC, double cK, Triplets& iteration);
   void constraintRows(bool bodyColumns, Triplets& constraintJacobian);
   void weldTangent(const VectorXd& lambda, double cK, bool bodyColumns, Triplets& iteration) const;
-  // Indices of body i's velocity variation y_i and subtree wrench z_i among
-  // the Newton matrix's unknowns (auxiliary, after the velocities).
+  // Indices of body i's variations among the Newton matrix's unknowns
+  // (auxiliary, after the velocities): of its pose and velocity y_i, of
+  // the wrench z_i its inboard joint passes, of its acceleration w_i.
   int bodyUnknown(int i) const { return model_.velocityCount + 6 * i; }
   int wrenchUnknown(int i) const { return model_.velocityCount + 6 * (int(model_.bodies.size()) + i); }
+  int accelerationUnknown(int i) const { return model_.velocityCount + 6 * (2 * int(model_.bodies.size()) + i); }
 
   Model model_;
   Data data_;

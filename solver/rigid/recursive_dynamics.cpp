@@ -13,6 +13,30 @@ Data::Data(const Model& model)
       subtreeTorque(model.bodies.size(), Vec3::Zero()),
       velocityTransformation(Eigen::MatrixXd::Zero(6 * model.bodies.size(), model.rigidVelocityCount)) {}
 
+namespace {
+
+// What the rates add to a body over its parent: its velocity and the bias
+// of its acceleration (the rate terms Sdot qdot + Xdot Y_parent),
+//   a_i = a_p + alpha_p x dr + S qddot + bias,  alpha_i = alpha_p + S_w qddot + bias_w.
+struct RateTerms {
+  Vec3 velocity, angularVelocity, linearBias, angularBias;
+};
+
+RateTerms rateTerms(const JointMotion& m, const Vec3& parentVelocity, const Vec3& parentOmega, const Mat3& AP,
+                    const Mat3& AC, const Vec3& pC, const Vec3& dr, const Eigen::Ref<const VectorXd>& qdot) {
+  RateTerms t;
+  const Vec3 wRel = AC * (m.Hw * qdot);
+  const Vec3 vSlide = AP * (m.Hv * qdot);
+  t.angularVelocity = parentOmega + wRel;
+  t.velocity = parentVelocity + parentOmega.cross(dr) + vSlide + pC.cross(wRel);
+  t.angularBias = t.angularVelocity.cross(wRel) + AC * m.HwDotQdot;
+  t.linearBias = parentOmega.cross(t.velocity - parentVelocity) + parentOmega.cross(vSlide) + AP * m.HvDotQdot +
+                 t.angularVelocity.cross(pC).cross(wRel) + pC.cross(t.angularBias);
+  return t;
+}
+
+}  // namespace
+
 void forwardKinematics(const Model& model, Data& data, const Configuration& q, const VectorXd& v,
                        const VectorXd& vdot) {
   const BodyKinematics ground;
@@ -41,23 +65,57 @@ void forwardKinematics(const Model& model, Data& data, const Configuration& q, c
     jk.motionSubspace.bottomRows<3>() = AC * m.Hw;
     jk.motionSubspace.topRows<3>() = AP * m.Hv + skew(pC) * jk.motionSubspace.bottomRows<3>();
 
-    // Velocities: Y_j = X Y_i + S qdot.
+    // Velocities Y_j = X Y_i + S qdot; accelerations Ydot_j = X Ydot_i + S qddot + bias.
     const Vec3 dr = c.position - p.position;
-    const Vec3 wRel = AC * (m.Hw * qdot);
-    const Vec3 vSlide = AP * (m.Hv * qdot);
-    c.angularVelocity = p.angularVelocity + wRel;
-    c.velocity = p.velocity + p.angularVelocity.cross(dr) + vSlide + pC.cross(wRel);
-
-    // Accelerations: Ydot_j = X Ydot_i + S qddot + (Sdot qdot + Xdot Y_i).
-    const Vec3 angularBias = c.angularVelocity.cross(wRel) + AC * m.HwDotQdot;
-    const Vec3 linearBias = p.angularVelocity.cross(vSlide) + AP * m.HvDotQdot +
-                            c.angularVelocity.cross(pC).cross(wRel) + pC.cross(angularBias);
+    const RateTerms t = rateTerms(m, p.velocity, p.angularVelocity, AP, AC, pC, dr, qdot);
+    c.velocity = t.velocity;
+    c.angularVelocity = t.angularVelocity;
     const Vec3 angularRel = AC * (m.Hw * qddot);
-    c.angularAcceleration = p.angularAcceleration + angularRel + angularBias;
-    c.acceleration = p.acceleration + p.angularAcceleration.cross(dr) +
-                     p.angularVelocity.cross(c.velocity - p.velocity) + AP * (m.Hv * qddot) +
-                     pC.cross(angularRel) + linearBias;
+    c.angularAcceleration = p.angularAcceleration + angularRel + t.angularBias;
+    c.acceleration = p.acceleration + p.angularAcceleration.cross(dr) + AP * (m.Hv * qddot) + pC.cross(angularRel) +
+                     t.linearBias;
   }
+}
+
+BiasRateDerivatives biasRateDerivatives(const Model& model, const Data& data, const Configuration& q,
+                                        const VectorXd& v, int body) {
+  const Body& b = model.bodies[body];
+  const Joint& jt = model.joints[b.inboardJoint];
+  const BodyKinematics ground;
+  const BodyKinematics& p = b.parent == kGroundIndex ? ground : data.body[b.parent];
+  const BodyKinematics& c = data.body[body];
+  const Mat3 AP = p.orientation * jt.parentMarker.orientation;
+  const Mat3 AC = data.joint[b.inboardJoint].childMarkerOrientation;
+  const Vec3 pC = data.joint[b.inboardJoint].childMarkerOffset;
+  const Vec3 dr = c.position - p.position;
+  VectorXd qdot = v.segment(jt.velocityOffset, jt.dofs);
+  auto bias = [&](const Vec3& parentVelocity, const Vec3& parentOmega, const VectorXd& rates) {
+    const RateTerms t = rateTerms(jointMotion(jt, q, rates), parentVelocity, parentOmega, AP, AC, pC, dr, rates);
+    Vec6 out;
+    out << t.linearBias, t.angularBias;
+    return out;
+  };
+  // Central differences: the bias is quadratic in the rates, so they are
+  // exact up to round-off.
+  const double scale = std::max({1.0, p.velocity.norm(), p.angularVelocity.norm(), qdot.cwiseAbs().maxCoeff()});
+  const double eps = 1e-6 * scale;
+  BiasRateDerivatives d;
+  d.parent.setZero();
+  d.rates.resize(6, jt.dofs);
+  if (b.parent != kGroundIndex)
+    for (int k = 0; k < 6; ++k) {
+      Vec3 dv = Vec3::Zero(), dw = Vec3::Zero();
+      (k < 3 ? dv[k] : dw[k - 3]) = eps;
+      d.parent.col(k) = (bias(p.velocity + dv, p.angularVelocity + dw, qdot) -
+                         bias(p.velocity - dv, p.angularVelocity - dw, qdot)) / (2.0 * eps);
+    }
+  for (int k = 0; k < jt.dofs; ++k) {
+    VectorXd plus = qdot, minus = qdot;
+    plus[k] += eps;
+    minus[k] -= eps;
+    d.rates.col(k) = (bias(p.velocity, p.angularVelocity, plus) - bias(p.velocity, p.angularVelocity, minus)) / (2.0 * eps);
+  }
+  return d;
 }
 
 void computeVelocityTransformation(const Model& model, Data& data) {

@@ -15,6 +15,17 @@ namespace mfbd {
 void forwardKinematics(const Model& model, Data& data, const Configuration& q, const VectorXd& v,
                        const VectorXd& vdot);
 
+// Derivatives of a body's acceleration bias (Sdot qdot + Xdot Y_parent:
+// Coriolis, centripetal and gyroscopic rate terms, [linear; angular]) with
+// respect to its parent's [velocity; angular velocity] and its joint's
+// rates, at fixed poses (after forwardKinematics).
+struct BiasRateDerivatives {
+  Eigen::Matrix<double, 6, 6> parent;  // zero for a body on ground
+  Matrix6X rates;                      // 6 x dofs
+};
+BiasRateDerivatives biasRateDerivatives(const Model& model, const Data& data, const Configuration& q,
+                                        const VectorXd& v, int body);
+
 // B from the motion subspaces (after forwardKinematics).
 void computeVelocityTransformation(const Model& model, Data& data);
 

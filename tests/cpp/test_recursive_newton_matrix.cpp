@@ -172,7 +172,7 @@ TEST(RecursiveNewtonMatrix, MassBlockIsTheJointSpaceMassMatrix) {
     const int n = joint.velocityCount(), m = joint.constraintCount();
     const int bodies = int(joint.model().bodies.size());
     EXPECT_EQ(m, scene == kCoupled ? 12 : 3);  // two welds; one spherical cut joint
-    EXPECT_EQ(recursive.auxiliaryCount(1.0), 12 * bodies);
+    EXPECT_EQ(recursive.auxiliaryCount(1.0), 18 * bodies);
     EXPECT_EQ(recursive.auxiliaryCount(0.0), 0);  // statics: joint space
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -187,10 +187,61 @@ TEST(RecursiveNewtonMatrix, MassBlockIsTheJointSpaceMassMatrix) {
         denseMatrix(Stepper::iterationMatrix(joint, stateOf(joint, q, v, vdot, lambda), 1, 0, 0, false));
     const Eigen::MatrixXd R =
         denseMatrix(Stepper::iterationMatrix(recursive, stateOf(recursive, q, v, vdot, lambda), 1, 0, 0, false));
-    ASSERT_EQ(R.rows(), n + m + 12 * bodies);
+    ASSERT_EQ(R.rows(), n + m + 18 * bodies);
     const Eigen::MatrixXd S = schurComplement(R, n + m);
     EXPECT_LT((S - J).cwiseAbs().maxCoeff(), 1e-10 * J.cwiseAbs().maxCoeff());
   }
+}
+
+TEST(RecursiveNewtonMatrix, DampingBlockIsTheJointSpaceOneAtAnyState) {
+  // The velocity derivatives (Coriolis and centripetal terms through the
+  // acceleration recursion, gyroscopic terms, dampers of joints and force
+  // elements) are all there: the cC block of the Schur complement equals
+  // the joint space's finite-difference dr/dv at a random moving state,
+  // for the closed tree and the coupled scene.
+  for (const std::string& scene : {std::string(kTree), closedTree(), std::string(kCoupled)}) {
+    SCOPED_TRACE(scene.size());
+    System joint(assemble(parseScene(withNewtonMatrix(scene, "joint_space"))));
+    System recursive(assemble(parseScene(withNewtonMatrix(scene, "recursive"))));
+    const int n = joint.velocityCount(), m = joint.constraintCount();
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    VectorXd dq(n), v(n), vdot(n), lambda(m);
+    for (int i = 0; i < n; ++i) dq[i] = 0.3 * u(rng), v[i] = 2.0 * u(rng), vdot[i] = u(rng);
+    for (int i = 0; i < m; ++i) lambda[i] = 10.0 * u(rng);
+    Configuration q = joint.model().initialConfiguration;
+    joint.retract(q, dq);
+    auto damping = [&](System& s) {
+      const IntegratorState st = stateOf(s, q, v, vdot, lambda);
+      const Eigen::MatrixXd MC = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, 1, 0, false)), n + m);
+      const Eigen::MatrixXd M = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, 0, 0, false)), n + m);
+      return Eigen::MatrixXd((MC - M).topLeftCorner(n, n));
+    };
+    const Eigen::MatrixXd C = damping(joint), Cr = damping(recursive);
+    EXPECT_GT(C.cwiseAbs().maxCoeff(), 1.0);
+    EXPECT_LT((Cr - C).cwiseAbs().maxCoeff(), 1e-6 * C.cwiseAbs().maxCoeff()) << (Cr - C).cwiseAbs().maxCoeff();
+  }
+}
+
+TEST(RecursiveNewtonMatrix, CutJointsLeaveTheJointForcesOfTreeJointsAlone) {
+  // Found by the test above: a cut joint (no rates of its own, offset 0)
+  // overwrote the joint forces of the first tree joints with zero, so joint
+  // damping, rotational springs and torque inputs there were lost in every
+  // closed-loop scene. With zero multipliers, closing the loop must not
+  // change dr/dv (the root's damping 0.4 + 0.7 N m s).
+  System open(assemble(parseScene(kTree))), closed(assemble(parseScene(closedTree())));
+  const int n = open.velocityCount();
+  ASSERT_EQ(closed.velocityCount(), n);
+  const Configuration q = open.model().initialConfiguration;
+  VectorXd v = VectorXd::Constant(n, 0.5), vdot = VectorXd::Zero(n), r0, r1, s0, s1, phi;
+  const double eps = 1e-6;
+  open.residual(0.0, q, v, vdot, VectorXd(), r0, phi);
+  closed.residual(0.0, q, v, vdot, VectorXd::Zero(closed.constraintCount()), s0, phi);
+  v[0] += eps;
+  open.residual(0.0, q, v, vdot, VectorXd(), r1, phi);
+  closed.residual(0.0, q, v, vdot, VectorXd::Zero(closed.constraintCount()), s1, phi);
+  EXPECT_LT(((s1 - s0) - (r1 - r0)).cwiseAbs().maxCoeff() / eps, 1e-6);
+  EXPECT_LT((s0 - r0).cwiseAbs().maxCoeff(), 1e-12);  // and the forces themselves
 }
 
 TEST(RecursiveNewtonMatrix, DampingAndStiffnessMatchTheJointSpaceWhereBIsNotLoaded) {
@@ -301,7 +352,9 @@ TEST(RecursiveNewtonMatrix, BodyInertiaBlockMatchesFiniteDifferences) {
   const double cM = 1.0, cC = 0.7, cK = 0.3;
   const Eigen::MatrixXd R =
       denseMatrix(Stepper::iterationMatrix(system, stateOf(system, q, v, vdot, VectorXd()), cM, cC, cK, false));
-  const Mat3 block = R.block<3, 3>(n + 3, n + 3);  // body 0's rotary rows and columns
+  // Body 0's rotary rows: cM J on its acceleration (columns n + 12 + 3..),
+  // the rest on its pose and velocity (columns n + 3..).
+  const Mat3 block = R.block<3, 3>(n + 3, n + 3) + R.block<3, 3>(n + 3, n + 12 + 3);
   const Mat3 expected = cM * J + cC * C + cK * K;
   EXPECT_LT((block - expected).cwiseAbs().maxCoeff(), 1e-8 * expected.cwiseAbs().maxCoeff())
       << block << "\n\n" << expected;
