@@ -209,15 +209,19 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     }
     // Modified Newton: a stale iteration matrix is refreshed when the
     // contraction slows, or when at its rate the tolerance would not be
-    // reached in the iterations left (a rate of 0.2 from 1e-3 to 1e-14
+    // reached in the few iterations left (a rate of 0.2 from 1e-3 to 1e-14
     // needs 16: a long communication step's matrix, kept over ten substeps
     // of a double pendulum, failed whole substeps that way); a fresh one
     // that does not contract has failed. Corrections within ten times the
     // round-off floor stay with the current matrix: there a refresh
     // (tangent and factorization, several iterations' worth) would save an
     // iteration at most, and their rate is half noise.
+    // Judged only in the last few iterations: earlier, a refresh for a
+    // merely slow rate costs more than the iterations it saves wherever the
+    // tangent is expensive (flexible four-bar: +35 % per substep).
     const int left = options_.maxIterations - 1 - k;
-    const bool tooSlow = rho < 1.0 && std::pow(rho, left) / (1.0 - rho) * size > options_.tolerance;
+    const bool tooSlow =
+        left <= 4 && rho < 1.0 && std::pow(rho, left) / (1.0 - rho) * size > options_.tolerance;
     if (k > 0 && (size > 0.25 * previous || tooSlow) && size > 10.0 * floor) {
       // Diverging: two corrections of this substep's own matrix, growing
       // (a correction right after a refresh is not compared with the stale
