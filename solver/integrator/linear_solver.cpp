@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include <Eigen/Dense>
-#include <Eigen/KLUSupport>
+#include <klu.h>
 
 namespace mfbd {
 
@@ -35,12 +35,60 @@ bool SparseAssembly::assign(int size, const std::vector<Eigen::Triplet<double>>&
   return true;
 }
 
+// KLU through its C interface rather than Eigen's wrapper, for klu_refactor:
+// a matrix of the analysed pattern is refactorised with the pivot order of
+// the last full factorization (no pivot search, no depth-first search per
+// column), about twice as fast; a full factorization is taken again when
+// the pivots have degraded (reciprocal pivot ratio below 1e-3 of the full
+// factorization's) or the refactorization fails.
+struct KluFactors {
+  klu_common common;
+  klu_symbolic* symbolic = nullptr;
+  klu_numeric* numeric = nullptr;
+  double fullPivotRatio = 0.0;  // klu_rcond of the last full factorization
+  KluFactors() { klu_defaults(&common); }
+  ~KluFactors() { release(); }
+  KluFactors(const KluFactors&) = delete;
+  KluFactors& operator=(const KluFactors&) = delete;
+  void release() {
+    if (numeric) klu_free_numeric(&numeric, &common);
+    if (symbolic) klu_free_symbolic(&symbolic, &common);
+  }
+  bool analyze(const SparseMatrix& A) {
+    release();
+    symbolic = klu_analyze(int(A.rows()), const_cast<int*>(A.outerIndexPtr()), const_cast<int*>(A.innerIndexPtr()),
+                           &common);
+    return symbolic != nullptr;
+  }
+  bool factorize(const SparseMatrix& A) {
+    if (!symbolic) return false;
+    int* p = const_cast<int*>(A.outerIndexPtr());
+    int* i = const_cast<int*>(A.innerIndexPtr());
+    double* x = const_cast<double*>(A.valuePtr());
+    if (numeric) {
+      if (klu_refactor(p, i, x, symbolic, numeric, &common) && klu_rcond(symbolic, numeric, &common) &&
+          common.rcond >= 1e-3 * fullPivotRatio)
+        return true;
+      klu_free_numeric(&numeric, &common);
+    }
+    numeric = klu_factor(p, i, x, symbolic, &common);
+    if (!numeric || !klu_rcond(symbolic, numeric, &common)) return false;
+    fullPivotRatio = common.rcond;
+    return common.status == KLU_OK;
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) {
+    Eigen::VectorXd x = b;
+    klu_solve(symbolic, numeric, int(x.size()), 1, x.data(), &common);
+    return x;
+  }
+};
+
 struct LinearSolver::Impl {
   bool sparse = false;
   Eigen::PartialPivLU<Eigen::MatrixXd> dense;
   // KLU holds raw SuiteSparse handles and cannot be copied; a copy of the
   // solver (state saving) re-analyses lazily.
-  std::unique_ptr<Eigen::KLU<SparseMatrix>> klu;
+  std::unique_ptr<KluFactors> klu;
   bool analyzed = false;
 };
 
@@ -68,16 +116,14 @@ void LinearSolver::analyzePattern(const SparseMatrix& A) {
   const double size = double(A.rows());
   impl_->sparse = A.rows() > kDenseThreshold && !(A.rows() <= kDenseMaximum && A.nonZeros() > 0.2 * size * size);
   if (!impl_->sparse) return;
-  impl_->klu = std::make_unique<Eigen::KLU<SparseMatrix>>();
-  impl_->klu->analyzePattern(A);
-  impl_->analyzed = true;
+  impl_->klu = std::make_unique<KluFactors>();
+  impl_->analyzed = impl_->klu->analyze(A);
 }
 
 LinearSolver::Status LinearSolver::factorize(const SparseMatrix& A) {
   if (impl_->sparse) {
     if (!impl_->analyzed) analyzePattern(A);
-    impl_->klu->factorize(A);
-    return impl_->klu->info() == Eigen::Success ? Status::Ok : Status::Singular;
+    return impl_->analyzed && impl_->klu->factorize(A) ? Status::Ok : Status::Singular;
   }
   const Eigen::MatrixXd dense(A);
   impl_->dense.compute(dense);
