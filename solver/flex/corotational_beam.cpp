@@ -147,8 +147,8 @@ Kinematics corotatedFrame(const CorotationalBeam& beam, const NodePose& n1,
   Kinematics k;
   k.A[0] = n1.A;
   k.A[1] = n2.A;
-  k.R[0] = n1.A * beam.C1;
-  k.R[1] = n2.A * beam.C2;
+  k.R[0] = beam.identityC1 ? n1.A : Mat3(n1.A * beam.C1);
+  k.R[1] = beam.identityC2 ? n2.A : Mat3(n2.A * beam.C2);
   const Vec3 x = n2.r - n1.r;
   k.l = x.norm();
   if (!(k.l > 1e-9 * beam.L0)) return k;
@@ -201,8 +201,10 @@ Vec7 strainIncrement(const CorotationalBeam& beam, const Kinematics& k, const Ve
   const Vec3 spin = frameSpin(k, dq);
   Vec7 de;
   de[0] = k.e1.dot(dq.segment<3>(6) - dq.segment<3>(0));
-  de.segment<3>(1) = k.Tinv[0] * (beam.C1.transpose() * dq.segment<3>(3) - k.R[0].transpose() * spin);
-  de.segment<3>(4) = k.Tinv[1] * (beam.C2.transpose() * dq.segment<3>(9) - k.R[1].transpose() * spin);
+  const Vec3 nodeSpin1 = beam.identityC1 ? Vec3(dq.segment<3>(3)) : Vec3(beam.C1.transpose() * dq.segment<3>(3));
+  const Vec3 nodeSpin2 = beam.identityC2 ? Vec3(dq.segment<3>(9)) : Vec3(beam.C2.transpose() * dq.segment<3>(9));
+  de.segment<3>(1) = k.Tinv[0] * (nodeSpin1 - k.R[0].transpose() * spin);
+  de.segment<3>(4) = k.Tinv[1] * (nodeSpin2 - k.R[1].transpose() * spin);
   return de;
 }
 
@@ -213,9 +215,9 @@ Vec12 strainMapTranspose(const CorotationalBeam& beam, const Kinematics& k, cons
   const Vec3 m2 = k.Tinv[1].transpose() * fl.segment<3>(4);
   Vec12 f = frameSpinTranspose(k, -(k.R[0] * m1 + k.R[1] * m2));
   f.segment<3>(0) -= fl[0] * k.e1;
-  f.segment<3>(3) += beam.C1 * m1;
+  f.segment<3>(3) += beam.identityC1 ? m1 : Vec3(beam.C1 * m1);
   f.segment<3>(6) += fl[0] * k.e1;
-  f.segment<3>(9) += beam.C2 * m2;
+  f.segment<3>(9) += beam.identityC2 ? m2 : Vec3(beam.C2 * m2);
   return f;
 }
 
@@ -380,6 +382,8 @@ CorotationalBeam CorotationalBeam::fromReference(const NodePose& n1, const NodeP
   E0 << e1, y.normalized(), e1.cross(y.normalized());
   beam.C1 = n1.A.transpose() * E0;
   beam.C2 = n2.A.transpose() * E0;
+  beam.identityC1 = beam.C1 == Mat3::Identity();
+  beam.identityC2 = beam.C2 == Mat3::Identity();
   beam.section = section;
   beam.localStiffness = localTimoshenkoStiffness(section, beam.L0);
   return beam;

@@ -70,16 +70,15 @@ Vec6 loadVector(const FlexLoad& l, const NodeState& s, const VectorXd& inputs, d
 
 // Adds P^T g to r for a 6-vector g acting on node n.
 void scatter(const FlexNode& n, const Vec6& g, VectorXd& r) {
+  if (n.free) {
+    r.segment<6>(n.dof[0]) += g;
+    return;
+  }
   for (int c = 0; c < 6; ++c)
     if (n.dof[c] >= 0) r[n.dof[c]] += n.P.col(c).dot(g);
 }
 
-// P = I: a free node (most of a mesh), whose blocks need no projection.
-bool isFree(const FlexNode& n) {
-  for (int c = 0; c < 6; ++c)
-    if (n.dof[c] < 0) return false;
-  return n.P == Mat6::Identity();
-}
+bool isFree(const FlexNode& n) { return n.free; }
 
 // Adds P_a^T B P_b to the triplets for a 6 x 6 block B coupling nodes a, b
 // (B itself when both are free: P^T B P would give B exactly anyway).

@@ -26,6 +26,9 @@ struct FlexNode {
   int drive = -1;         // prescribed rotation: index into FlexibleMesh::drives, -1 = clamped
   std::array<int, 6> dof{{-1, -1, -1, -1, -1, -1}};  // velocity index of each column of P, -1 if fixed
   Mat6 P = Mat6::Zero();
+  // P = I with consecutive dof (most of a mesh): its blocks and vectors go
+  // in unprojected (P^T B P and P^T g would give them exactly anyway).
+  bool free = false;
   NodalInertia inertia;
 };
 
