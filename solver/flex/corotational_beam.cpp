@@ -421,12 +421,107 @@ Vec12 nodeVelocities(const NodeVelocity& v1, const NodeVelocity& v2) {
 
 }  // namespace
 
+namespace {
+
+// Rotation vector of the small local rotation Rr^T R (the element's
+// deformation), from the trace and the skew part alone: the series of
+// math/rotation.cpp's logSO3 below 0.2 rad, without forming the product.
+Vec3 localRotation(const Vec3& e1, const Vec3& e2, const Vec3& e3, const Mat3& R) {
+  const Vec3 c0 = R.col(0), c1 = R.col(1), c2 = R.col(2);
+  const double cosT = (e1.dot(c0) + e2.dot(c1) + e3.dot(c2) - 1.0) * 0.5;
+  const Vec3 w(0.5 * (e3.dot(c1) - e2.dot(c2)), 0.5 * (e1.dot(c2) - e3.dot(c0)), 0.5 * (e2.dot(c0) - e1.dot(c1)));
+  const double s2 = w.squaredNorm();
+  if (!(cosT > 0.0 && s2 < 0.04)) {
+    Mat3 Rr;
+    Rr << e1, e2, e3;
+    return logSO3(Rr.transpose() * R);
+  }
+  static constexpr double c[11] = {1.0, 1.0 / 6.0, 3.0 / 40.0, 5.0 / 112.0, 35.0 / 1152.0, 63.0 / 2816.0,
+                                   231.0 / 13312.0, 143.0 / 10240.0, 6435.0 / 557056.0, 12155.0 / 1245184.0,
+                                   46189.0 / 5505024.0};
+  // Below 1e-3 rad three terms reach 1e-19 (the usual case); above, the
+  // series in two halves (Estrin) for a shorter dependency chain.
+  if (s2 < 1e-6) return w * (c[0] + s2 * (c[1] + s2 * c[2]));
+  const double s4 = s2 * s2, s10 = s4 * s4 * s2;
+  const double low = (c[0] + s2 * c[1]) + s4 * ((c[2] + s2 * c[3]) + s4 * c[4]);
+  const double high = (c[5] + s2 * c[6]) + s4 * ((c[7] + s2 * c[8]) + s4 * (c[9] + s2 * c[10]));
+  return w * (low + s10 * high);
+}
+
+// e(t) of T^-1 (inverseTangentCoefficients) alone.
+double inverseTangentE(const Vec3& theta) {
+  const double t2 = theta.squaredNorm();
+  if (t2 < 1e-4) return 1.0 / 12.0 + t2 * (1.0 / 720.0 + t2 * (1.0 / 30240.0));  // next term < 1e-17 relative
+  return inverseTangentCoefficients(theta).e;
+}
+
+// T^-1 y and T^-T y without forming T^-1 = e theta theta^T + S/2 + (1 - e t^2) I.
+Vec3 inverseTangentTimes(const Vec3& theta, double e, const Vec3& y, bool transposed) {
+  const Vec3 half = 0.5 * theta.cross(y);
+  return (1.0 - e * theta.squaredNorm()) * y + (e * theta.dot(y)) * theta + (transposed ? -half : half);
+}
+
+}  // namespace
+
+// The same f as internalForces (corotatedFrame, localForce,
+// strainMapTranspose), written for the residual's element loop: no
+// Kinematics workspace, no tangent-operator matrices, products with the
+// frame taken as dot products, the local rotations by localRotation.
 bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
                          const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta, Vec12& f) {
-  const Kinematics k = corotatedFrame(beam, n1, n2);
-  if (!k.valid) return false;
-  f = strainMapTranspose(beam, k, localForce(beam, k, nodeVelocities(v1, v2), dampingBeta));
-  return f.allFinite();
+  const Mat3 R0 = beam.identityC1 ? n1.A : Mat3(n1.A * beam.C1);
+  const Mat3 R1 = beam.identityC2 ? n2.A : Mat3(n2.A * beam.C2);
+  const Vec3 x = n2.r - n1.r;
+  const double l = x.norm();
+  if (!(l > 1e-9 * beam.L0)) return false;
+  const double inverseLength = 1.0 / l;
+  const Vec3 e1 = x * inverseLength;
+  const Vec3 q0 = R0.col(1), q1 = R1.col(1);
+  const Vec3 qMean = 0.5 * (q0 + q1);
+  const Vec3 n = e1.cross(qMean);
+  const double qy = n.norm();
+  if (!(qy > 1e-6)) return false;
+  const Vec3 e3 = n / qy;
+  const Vec3 e2 = e3.cross(e1);
+  const double eta = qMean.dot(e1) / qy;
+  const Vec3 theta0 = localRotation(e1, e2, e3, R0), theta1 = localRotation(e1, e2, e3, R1);
+  const double tangent0 = inverseTangentE(theta0), tangent1 = inverseTangentE(theta1);
+  const double u = (x.squaredNorm() - beam.L0 * beam.L0) / (l + beam.L0);
+  // twist_i = A_i^T (q_i x e3) / (2 qy): e1.dw_r of node i's spin
+  const Vec3 twist0 = n1.A.transpose() * (q0.cross(e3) / (2.0 * qy));
+  const Vec3 twist1 = n2.A.transpose() * (q1.cross(e3) / (2.0 * qy));
+  // Pr d and Pr^T w (chordSpinTimes, chordSpinTransposeTimes)
+  auto chordSpin = [&](const Vec3& d) { return (e3 * e2.dot(d) - (eta * e1 + e2) * e3.dot(d)) * inverseLength; };
+  auto chordSpinTranspose = [&](const Vec3& w) {
+    return (e2 * e3.dot(w) - e3 * (eta * e1.dot(w) + e2.dot(w))) * inverseLength;
+  };
+  Vec7 el;
+  el << u, theta0, theta1;
+  const Mat7& Kl = beam.localStiffness;
+  Vec7 fl = Kl * el;
+  if (dampingBeta != 0.0) {
+    // edot_l = B v (strainIncrement)
+    const Vec3 spin = chordSpin(v2.v - v1.v) + e1 * (twist0.dot(v1.omega) + twist1.dot(v2.omega));
+    const Vec3 w0 = beam.identityC1 ? v1.omega : Vec3(beam.C1.transpose() * v1.omega);
+    const Vec3 w1 = beam.identityC2 ? v2.omega : Vec3(beam.C2.transpose() * v2.omega);
+    Vec7 rate;
+    rate[0] = e1.dot(v2.v - v1.v);
+    rate.segment<3>(1) = inverseTangentTimes(theta0, tangent0, w0 - R0.transpose() * spin, false);
+    rate.segment<3>(4) = inverseTangentTimes(theta1, tangent1, w1 - R1.transpose() * spin, false);
+    fl += dampingBeta * (Kl * rate);
+  }
+  // f = B^T f_l (strainMapTranspose)
+  const Vec3 m0 = inverseTangentTimes(theta0, tangent0, fl.segment<3>(1), true);
+  const Vec3 m1 = inverseTangentTimes(theta1, tangent1, fl.segment<3>(4), true);
+  const Vec3 w = -(R0 * m0 + R1 * m1);
+  const Vec3 chord = chordSpinTranspose(w);
+  const double axial = e1.dot(w);
+  f.segment<3>(0) = -chord - fl[0] * e1;
+  f.segment<3>(3) = axial * twist0 + (beam.identityC1 ? m0 : Vec3(beam.C1 * m0));
+  f.segment<3>(6) = chord + fl[0] * e1;
+  f.segment<3>(9) = axial * twist1 + (beam.identityC2 ? m1 : Vec3(beam.C2 * m1));
+  // A NaN or infinity anywhere (u, theta, the frame) reaches f; so does its sum.
+  return std::isfinite(f.sum());
 }
 
 BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
