@@ -355,6 +355,19 @@ void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, co
   K += dampingBeta * BtKl.lazyProduct(dStrainRate);
 }
 
+// K_l B using the pattern of localTimoshenkoStiffness: axial (0), torsion
+// (1, 4), bending (2, 5) and (3, 6) couple only within their pairs.
+Mat7x12 localStiffnessTimes(const Mat7& Kl, const Mat7x12& B) {
+  Mat7x12 out;
+  out.row(0) = Kl(0, 0) * B.row(0);
+  for (int a = 1; a <= 3; ++a) {
+    const int b = a + 3;
+    out.row(a) = Kl(a, a) * B.row(a) + Kl(a, b) * B.row(b);
+    out.row(b) = Kl(b, a) * B.row(a) + Kl(b, b) * B.row(b);
+  }
+  return out;
+}
+
 Vec7 localDeformationVector(const Kinematics& k) {
   Vec7 e;
   e << k.u, k.theta[0], k.theta[1];
@@ -539,7 +552,7 @@ BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
   }
   tangentMaps(beam, k);
   // Small products: coefficient-wise (lazyProduct), not Eigen's blocked GEMM.
-  const Eigen::Matrix<double, 12, 7> BtKl = k.B.transpose().lazyProduct(beam.localStiffness);
+  const Eigen::Matrix<double, 12, 7> BtKl = localStiffnessTimes(beam.localStiffness, k.B).transpose();
   out.K = BtKl.lazyProduct(k.B);
   out.C = dampingBeta * out.K;
   addGeometricStiffness(beam, k, fl, v, dampingBeta, BtKl, out.K);

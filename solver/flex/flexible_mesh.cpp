@@ -83,6 +83,12 @@ bool isFree(const FlexNode& n) { return n.free; }
 // Adds P_a^T B P_b to the triplets for a 6 x 6 block B coupling nodes a, b
 // (B itself when both are free: P^T B P would give B exactly anyway).
 void scatter(const FlexNode& a, const FlexNode& b, bool bothFree, const Mat6& B, Triplets& out) {
+  if (bothFree) {  // consecutive dof: the block as it is, column by column as below
+    const int i0 = a.dof[0], j0 = b.dof[0];
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) out.emplace_back(i0 + i, j0 + j, B(i, j));
+    return;
+  }
   const Mat6 projected = bothFree ? B : Mat6(a.P.transpose() * B * b.P);
   for (int i = 0; i < 6; ++i) {
     if (a.dof[i] < 0) continue;
