@@ -51,9 +51,19 @@ ExpCoefficients expCoefficients(double t) {
 }  // namespace
 
 Mat3 expSO3(const Vec3& theta) {
-  const ExpCoefficients k = expCoefficients(theta.norm());
-  const Mat3 S = skew(theta);
-  return Mat3::Identity() + k.a * S + k.b * S * S;
+  const double t2 = theta.squaredNorm();
+  const ExpCoefficients k = expCoefficients(std::sqrt(t2));
+  // I + a S + b S^2 with S^2 = theta theta^T - t^2 I (no 3 x 3 product).
+  Mat3 E = (k.b * theta) * theta.transpose();
+  E.diagonal().array() += 1.0 - k.b * t2;
+  const Vec3 as = k.a * theta;
+  E(0, 1) -= as.z();
+  E(1, 0) += as.z();
+  E(0, 2) += as.y();
+  E(2, 0) -= as.y();
+  E(1, 2) -= as.x();
+  E(2, 1) += as.x();
+  return E;
 }
 
 Vec3 logSO3(const Mat3& R) {
