@@ -232,8 +232,13 @@ void tangentMaps(const CorotationalBeam& beam, Kinematics& k) {
   k.B.block<1, 3>(0, 0) = -k.e1.transpose();
   k.B.block<1, 3>(0, 6) = k.e1.transpose();
   for (int i = 0; i < 2; ++i) {
+    // -R_i^T P from P = [-Pr, e1 twist_1^T, Pr, e1 twist_2^T] block by block
+    const Mat3 RtPr = k.R[i].transpose() * k.Pr;
+    const Vec3 Rte1 = k.R[i].transpose() * k.e1;
+    k.X[i].block<3, 3>(0, 0) = RtPr;
+    k.X[i].block<3, 3>(0, 6) = -RtPr;
+    for (int j = 0; j < 2; ++j) k.X[i].block<3, 3>(0, 3 + 6 * j) = -Rte1 * k.twist[j].transpose();
     // R_i^T dw_i = C_i^T A_i^T A_i dtheta_i = C_i^T dtheta_i
-    k.X[i] = -k.R[i].transpose() * k.P;
     k.X[i].block<3, 3>(0, 3 + 6 * i) += C[i].transpose();
     k.B.middleRows<3>(1 + 3 * i) = k.Tinv[i] * k.X[i];
   }
@@ -253,9 +258,17 @@ struct FrameDerivatives {
 
 FrameDerivatives frameDerivatives(const Kinematics& k) {
   FrameDerivatives d;
-  d.dE1 = -skew(k.e1) * k.P;
-  d.dE2 = -skew(k.e2) * k.P;
-  d.dE3 = -skew(k.e3) * k.P;
+  // -skew(e_j) P = [skew(e_j) Pr, -(e_j x e1) twist_1^T, -skew(e_j) Pr, -(e_j x e1) twist_2^T],
+  // with e1 x e1 = 0, e2 x e1 = -e3, e3 x e1 = e2.
+  auto spinOf = [&k](Mat3x12& dE, const Vec3& e, const Vec3& eCrossE1) {
+    const Mat3 ePr = skew(e) * k.Pr;
+    dE.block<3, 3>(0, 0) = ePr;
+    dE.block<3, 3>(0, 6) = -ePr;
+    for (int i = 0; i < 2; ++i) dE.block<3, 3>(0, 3 + 6 * i) = -eCrossE1 * k.twist[i].transpose();
+  };
+  spinOf(d.dE1, k.e1, Vec3::Zero());
+  spinOf(d.dE2, k.e2, -k.e3);
+  spinOf(d.dE3, k.e3, k.e2);
   d.dl.setZero();
   d.dl.segment<3>(0) = -k.e1.transpose();
   d.dl.segment<3>(6) = k.e1.transpose();
@@ -332,13 +345,23 @@ void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, co
     sSum += s;
     dStrain[i] = k.B.middleRows<3>(1 + 3 * i);
     const Mat3x12 Y = inverseTangentVariation(k.theta[i], k.tangentCoefficients[i], flRotation, true) * dStrain[i];
-    G.middleRows<3>(3 + 6 * i) += C[i] * Y;
+    if (i == 0 ? beam.identityC1 : beam.identityC2)
+      G.middleRows<3>(3 + 6 * i) += Y;
+    else
+      G.middleRows<3>(3 + 6 * i) += C[i] * Y;
     spin -= k.R[i] * Y;
     spin.block<3, 3>(0, 3 + 6 * i) += skew(s) * k.A[i];
   }
   G.middleRows<3>(0) -= fl[0] * d.dE1;
   G.middleRows<3>(6) += fl[0] * d.dE1;
-  K += G + k.P.transpose().lazyProduct(spin) - frameSpinTransposeDerivative(k, d, sSum);
+  // P^T spin = [-Pr^T spin; twist_1 (e1^T spin); Pr^T spin; twist_2 (e1^T spin)]
+  const Mat3x12 PrTspin = k.Pr.transpose() * spin;
+  const Row12 e1spin = k.e1.transpose() * spin;
+  G.middleRows<3>(0) -= PrTspin;
+  G.middleRows<3>(6) += PrTspin;
+  G.middleRows<3>(3) += k.twist[0] * e1spin;
+  G.middleRows<3>(9) += k.twist[1] * e1spin;
+  K += G - frameSpinTransposeDerivative(k, d, sSum);
   if (dampingBeta == 0.0) return;
   // d(B v) = [(v2 - v1)^T de1; dT^-1_i X_i v + T^-1_i R_i^T (dw_i x P v - dP v)]
   const Vec3 spinRate = frameSpin(k, v);
