@@ -13,6 +13,7 @@
 //
 //   chain_cost [--bodies 2,5,...] [--duration 0.2] [--h 1e-3]
 //              [--communication 0.01] [--min-time 0.5] [--max-repeats 20]
+//              [--newton-matrix automatic|joint_space|recursive] [--bar-length 0 (= 1/n)]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -32,14 +33,17 @@ struct Options {
   std::vector<int> bodies{2, 5, 10, 20, 50, 100, 200};
   double duration = 0.2, h = 1e-3, communication = 0.01, minTime = 0.5;
   int maxRepeats = 20;
+  std::string newtonMatrix = "automatic";
+  double barLength = 0.0;  // 0: 1/n m (the chain's length is 1 m)
 };
 
-std::string chainScene(int n, double h) {
-  const double length = 1.0 / n, mass = 1.0 / n, inertia = mass * length * length / 12.0;
+std::string chainScene(int n, double h, const std::string& newtonMatrix, double barLength) {
+  const double length = barLength > 0.0 ? barLength : 1.0 / n, mass = 1.0 / n,
+               inertia = mass * length * length / 12.0;
   std::ostringstream s;
   s.precision(17);
   s << "{\"format\": \"mfbd-scene/1\", \"name\": \"chain\", \"gravity\": [0, -9.81, 0],"
-    << " \"solver\": {\"h_max\": " << h << "}, \"bodies\": [";
+    << " \"solver\": {\"h_max\": " << h << ", \"newton_matrix\": \"" << newtonMatrix << "\"}, \"bodies\": [";
   for (int i = 0; i < n; ++i)
     s << (i ? ", " : "") << "{\"name\": \"bar" << i << "\", \"mass\": " << mass << ", \"inertia\": [0, " << inertia
       << ", " << inertia << "], \"position\": [" << (i + 0.5) * length << ", 0, 0]}";
@@ -68,16 +72,17 @@ double seconds(const std::function<void()>& work, double minTime = 0.05) {
 struct Stepper : mfbd::TimeStepper {
   using TimeStepper::TimeStepper;
   using TimeStepper::iterationMatrix;
+  using TimeStepper::newtonSize;
   bool initialize(mfbd::Dynamics&, mfbd::IntegratorState&, std::string&) override { return true; }
   bool substep(mfbd::Dynamics&, mfbd::IntegratorState&, double, std::string&) override { return true; }
 };
 
 void measure(int n, const Options& o) {
-  const mfbd::Scene scene = mfbd::parseScene(chainScene(n, o.h));
+  const mfbd::Scene scene = mfbd::parseScene(chainScene(n, o.h, o.newtonMatrix, o.barLength));
   const long steps = std::lround(o.duration / o.communication);
   double best = 1e300, total = 0.0;
   int repeats = 0;
-  long substeps = 0, newton = 0, factorizations = 0;
+  long substeps = 0, newton = 0, factorizations = 0, rejected = 0;
   std::unique_ptr<mfbd::Simulation> last;
   while (repeats < o.maxRepeats && (repeats == 0 || total < o.minTime)) {
     auto sim = std::make_unique<mfbd::Simulation>(scene);
@@ -99,6 +104,7 @@ void measure(int n, const Options& o) {
     substeps = sim->state().substeps;
     newton = sim->state().newtonIterations;
     factorizations = sim->state().factorizations;
+    rejected = sim->state().rejectedSubsteps;
     last = std::move(sim);
   }
   // One Newton iteration taken apart, at the final state.
@@ -111,17 +117,18 @@ void measure(int n, const Options& o) {
     mfbd::Triplets S, G;
     system.tangent(s.t, s.q, s.v, s.vdot, s.lambda, 1.0, cC, cK, S, G);
   });
+  // Assembly (tangent and matrix) and the numeric factorization, the
+  // pattern analysed once as in a run.
   mfbd::LinearSolver solver;
-  const double factorize = seconds([&] {
-    const mfbd::SparseMatrix A = Stepper::iterationMatrix(system, s, 1.0, cC, cK);
-    solver.analyzePattern(A);
-    solver.factorize(A);
-  });
-  const Eigen::VectorXd b = Eigen::VectorXd::Ones(system.velocityCount() + system.constraintCount());
+  mfbd::SparseMatrix A;
+  const double assemble = seconds([&] { A = Stepper::iterationMatrix(system, s, 1.0, cC, cK); });
+  solver.analyzePattern(A);
+  const double factorize = seconds([&] { solver.factorize(A); });
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(Stepper::newtonSize(system, 1.0));
   const double solve = seconds([&] { volatile double x = solver.solve(b)[0]; (void)x; });
-  std::printf("%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%ld,%d\n", n, 1e6 * best / substeps, double(newton) / substeps,
-              double(factorizations) / substeps, 1e6 * residual, 1e6 * tangent, 1e6 * factorize, 1e6 * solve,
-              substeps, repeats);
+  std::printf("%d,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%ld,%ld,%d\n", n, 1e6 * best / substeps,
+              double(newton) / substeps, double(factorizations) / substeps, 1e6 * residual, 1e6 * tangent,
+              1e6 * assemble, 1e6 * factorize, 1e6 * solve, substeps, rejected, repeats);
   std::fflush(stdout);
 }
 
@@ -146,13 +153,15 @@ int main(int argc, char** argv) {
     else if (a == "--communication") o.communication = std::atof(value);
     else if (a == "--min-time") o.minTime = std::atof(value);
     else if (a == "--max-repeats") o.maxRepeats = std::atoi(value);
+    else if (a == "--newton-matrix") o.newtonMatrix = value;
+    else if (a == "--bar-length") o.barLength = std::atof(value);
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
     }
   }
   std::printf("bodies,us_per_step,newton_per_step,factorizations_per_step,residual_us,tangent_us,"
-              "assembly_factorization_us,solve_us,substeps,repeats\n");
+              "assembly_us,factorization_us,solve_us,substeps,rejected_substeps,repeats\n");
   for (int n : o.bodies) measure(n, o);
   return 0;
 }

@@ -1,19 +1,30 @@
 #!/usr/bin/env python3
-"""Per-step cost of a rigid n-body pendulum chain against n (n = 2..200).
+"""Per-step cost of a rigid n-body pendulum chain against n (n = 2..200),
+for both forms of the Newton matrix.
 
-Runs the C++ benchmark benchmarks/chain_cost.cpp (n uniform bars of 1/n m and
-1/n kg on revolute joints, released from horizontal, advanced by
+Runs the C++ benchmark benchmarks/chain_cost.cpp (n uniform bars of 1/n kg
+on revolute joints, released from horizontal under gravity, advanced by
 mfbd::Simulation::doStep with substeps h = 1e-3 and communication steps of
 0.01 s over 0.2 s), compiling it first (g++ against build/libmfbd_solver.a)
 when the binary is missing or older than its sources. C++ rather than the
 FMU through fmpy, so that the FMI calls and the Python loop do not hide the
 solver's own cost at small n.
 
-Writes results/chain_cost.csv (n, wall time per substep, Newton iterations
-and factorizations per substep, and one Newton iteration taken apart at the
-final state: residual, tangent, assembly with factorization, solve) and
-results/chain_cost.png (log-log against n, with lines proportional to n and
-to n^2). A study, not a test: nothing here asserts a time.
+Two chains and two forms (solver.newton_matrix):
+- bars of 1 m: the motion over 0.2 s is alike for every n, so the cost per
+  substep shows the algorithm's cost in n;
+- bars of 1/n m (a 1 m chain): finer links whip faster as n grows
+  (link angular rates ~ 1/length), so substeps are rejected and Newton
+  needs more iterations: the problem gets harder with n, not only larger;
+- joint_space: B^T M B with finite-difference derivatives (dense for a
+  chain: tangent O(n^2), LU O(n^3));
+- recursive: body-level unknowns eliminated leaf to root (O(n)).
+
+Writes results/chain_cost.csv (chain, form, n, wall time per substep,
+Newton iterations, factorizations and rejected substeps per run, and one
+Newton iteration taken apart at the final state: residual, tangent,
+assembly, factorization, solve) and results/chain_cost.png. A study, not a
+test: nothing here asserts a time.
 """
 import argparse
 import csv
@@ -24,6 +35,8 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 BENCHMARKS = ROOT / "benchmarks"
+FORMS = ("joint_space", "recursive")
+CHAINS = {"1 m bars": 1.0, "1/n m bars": 0.0}  # --bar-length (0: 1/n)
 
 
 def compile_benchmark(build: pathlib.Path) -> pathlib.Path:
@@ -52,24 +65,28 @@ def plot(rows, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
-
-    n = np.array([float(r["bodies"]) for r in rows])
-    fig, ax = plt.subplots(figsize=(6.8, 5.0))
-    series = [("us_per_step", "per substep (all)", "o-"), ("tangent_us", "one tangent (FD over n rates)", "s--"),
-              ("assembly_factorization_us", "tangent + assembly + LU", "^--"),
-              ("residual_us", "one residual", "v-"), ("solve_us", "one solve", "d-")]
-    for key, label, style in series:
-        y = np.array([float(r[key]) for r in rows])
-        ax.loglog(n, y, style, label=f"{label}: ~n^{slope(n, y):.1f}")
-    step = np.array([float(r["us_per_step"]) for r in rows])
-    for power, style in ((1, "k:"), (2, "k-.")):
-        c = step[-1] / n[-1] ** power
-        ax.loglog(n, c * n ** power, style, lw=0.8, label=f"~n^{power}")
-    ax.set_xlabel("bodies n")
-    ax.set_ylabel("wall time [us]")
-    ax.set_title("Pendulum chain, joint coordinates, modified Newton", fontsize=9)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.8), sharey=True)
+    styles = {"joint_space": ("C0", "joint space (B^T M B, FD tangent)"), "recursive": ("C3", "recursive (O(n) elimination)")}
+    for ax, chain in zip(axes, CHAINS):
+        for form in FORMS:
+            sel = [r for r in rows if r["chain"] == chain and r["form"] == form]
+            if not sel:
+                continue
+            n = np.array([float(r["bodies"]) for r in sel])
+            step = np.array([float(r["us_per_step"]) for r in sel])
+            per_iteration = step / np.array([float(r["newton_per_step"]) for r in sel])
+            colour, label = styles[form]
+            ax.loglog(n, step, "o-", color=colour, label=f"{label}, per substep: ~n^{slope(n, step):.2f}")
+            ax.loglog(n, per_iteration, "s:", color=colour, ms=4,
+                      label=f"per Newton iteration: ~n^{slope(n, per_iteration):.2f}")
+        top = max(float(r["us_per_step"]) for r in rows if r["chain"] == chain)
+        n = np.array(sorted({float(r["bodies"]) for r in rows}))
+        ax.loglog(n, top / n[-1] * n, "k--", lw=0.8, label="~n")
+        ax.set_title(f"pendulum chain of {chain}, released from horizontal, h = 1e-3", fontsize=9)
+        ax.set_xlabel("bodies n")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[0].set_ylabel("wall time [us]")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     print(f"wrote {path}")
@@ -85,17 +102,25 @@ def main():
     p.add_argument("--out", type=pathlib.Path, default=ROOT / "benchmarks" / "results")
     args = p.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    command = [str(compile_benchmark(args.build)), "--bodies", ",".join(map(str, args.bodies)),
-               "--duration", str(args.duration), "--h", str(args.h), "--min-time", str(args.min_time)]
-    text = subprocess.run(command, check=True, capture_output=True, text=True).stdout
-    rows = list(csv.DictReader(io.StringIO(text)))
+    binary = compile_benchmark(args.build)
+    rows = []
+    for chain, bar_length in CHAINS.items():
+        for form in FORMS:
+            command = [str(binary), "--bodies", ",".join(map(str, args.bodies)), "--duration", str(args.duration),
+                       "--h", str(args.h), "--min-time", str(args.min_time), "--newton-matrix", form,
+                       "--bar-length", str(bar_length)]
+            text = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+            for r in csv.DictReader(io.StringIO(text)):
+                rows.append({"chain": chain, "form": form, **r})
+                print(f"{chain:>10}, {form:>11}, n = {r['bodies']:>4}: {float(r['us_per_step']):9.1f} us/substep, "
+                      f"Newton {r['newton_per_step']}, factorizations {r['factorizations_per_step']} per substep, "
+                      f"{r['rejected_substeps']} rejected")
     path = args.out / "chain_cost.csv"
-    path.write_text(text)
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
     print(f"wrote {path}")
-    for r in rows:
-        print(f"n = {r['bodies']:>4}: {float(r['us_per_step']):10.1f} us/substep, Newton {r['newton_per_step']}, "
-              f"factorizations {r['factorizations_per_step']} per substep; tangent {float(r['tangent_us']):.0f} us, "
-              f"residual {float(r['residual_us']):.1f} us")
     plot(rows, args.out / "chain_cost.png")
 
 

@@ -61,8 +61,8 @@ std::string Simulation::constraintOwner(int row) const {
 
 Eigen::MatrixXd Simulation::constraintJacobian(const Configuration& q, const VectorXd& v) {
   const int n = system_.velocityCount(), m = system_.constraintCount();
-  Triplets S, G;
-  system_.tangent(state_.t, q, v, VectorXd::Zero(n), VectorXd::Zero(m), 0.0, 0.0, 0.0, S, G);
+  Triplets G;
+  system_.constraintJacobian(state_.t, q, v, G);
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, n);
   for (const auto& e : G) J(e.row(), e.col()) += e.value();
   return J;
@@ -174,6 +174,10 @@ bool Simulation::initialize(double t0, std::string& message, std::vector<std::st
     if (!redundant.empty())
       notes->push_back("redundant constraints at the start (regularised in the solve): " + redundant);
   }
+  if (notes && system_.recursiveNewtonMatrix())
+    notes->push_back("Newton matrix in the recursive form: " + std::to_string(system_.model().bodies.size()) +
+                     " bodies, " + std::to_string(system_.auxiliaryCount(1.0)) +
+                     " body-level unknowns (solver.newton_matrix)");
   if (!stepper_->initialize(system_, state_, message)) return false;
   outputsCurrent_ = false;
   evaluateOutputs(false);
@@ -186,6 +190,10 @@ bool Simulation::startFromEquilibrium(std::string& message, std::vector<std::str
   InitialEquilibriumReport report;
   if (!solveInitialEquilibrium(system_, state_, scene_.solver, report, message)) return false;
   if (notes) notes->push_back(report.describe(system_));
+  if (notes && system_.recursiveNewtonMatrix())
+    notes->push_back("Newton matrix in the recursive form: " + std::to_string(system_.model().bodies.size()) +
+                     " bodies, " + std::to_string(system_.auxiliaryCount(1.0)) +
+                     " body-level unknowns (solver.newton_matrix)");
   if (!stepper_->initialize(system_, state_, message)) return false;
   outputsCurrent_ = false;
   evaluateOutputs(false);

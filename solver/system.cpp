@@ -49,6 +49,21 @@ System::System(Model model)
     for (int k = 0; k < n; ++k)
       ratesCoupled_(i, k) = branchesCoupled || outboardOf(bodyOfColumn[i], bodyOfColumn[k]) ||
                             outboardOf(bodyOfColumn[k], bodyOfColumn[i]);
+  // The joint-space tangent costs a residual per rate and a factorization
+  // of its pattern: the recursive form pays off once that pattern holds
+  // about a dense block of kRecursiveNewtonMatrixRates rates (a chain of
+  // that length). Not automatically with cut joints: their multipliers
+  // couple every body between the loop's ends in the elimination, and
+  // for many loops on a long path (R3's 40) the fill costs more than the
+  // joint-space LU (measured: 14 ms against 2 ms per factorization).
+  using Form = SolverOptions::NewtonMatrix;
+  bool cutJoints = false;
+  for (const Joint& j : model_.joints) cutJoints = cutJoints || j.cut;
+  const int coupled = int(ratesCoupled_.count());
+  const int dense = SolverOptions::kRecursiveNewtonMatrixRates * SolverOptions::kRecursiveNewtonMatrixRates;
+  recursiveMatrix_ = model_.analysis == Analysis::Dynamic && !model_.bodies.empty() &&
+                     (model_.solver.newtonMatrix == Form::Recursive ||
+                      (model_.solver.newtonMatrix == Form::Automatic && !cutJoints && coupled >= dense));
 }
 
 void System::startDrives(double t0) {
@@ -204,32 +219,8 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
                           Triplets& constraintJacobian) {
   const int n = model_.rigidVelocityCount;
   forwardKinematics(model_, data_, q, v, vdot);
-  if (model_.constraintCount > 0) computeVelocityTransformation(model_, data_);
   Eigen::MatrixXd S = cM * jointSpaceMassMatrix(model_, data_);
-  // Constraint rows Phi_q = Phi_Z B, over the rates that move the bodies.
-  const Eigen::MatrixXd& B = data_.velocityTransformation;
-  for (const Joint& j : model_.joints) {
-    if (j.driven) constraintJacobian.emplace_back(j.constraintOffset, j.velocityOffset, 1.0);
-    if (!j.cut) continue;
-    const int parent = j.parentMarker.body, child = j.childMarker.body;
-    const ConstraintEvaluation c = evaluateJointConstraint(constraintOf(j), poseOf(data_, parent), poseOf(data_, child));
-    Eigen::MatrixXd rows = c.jacobianChild * B.middleRows<6>(6 * child);
-    if (parent != kGroundIndex) rows += c.jacobianParent * B.middleRows<6>(6 * parent);
-    // Nonzero only in the rates that move the two bodies.
-    std::vector<int> columns = parent == kGroundIndex ? std::vector<int>() : supportColumns_[parent];
-    columns.insert(columns.end(), supportColumns_[child].begin(), supportColumns_[child].end());
-    std::sort(columns.begin(), columns.end());
-    columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
-    for (int col : columns)
-      for (int i = 0; i < rows.rows(); ++i) constraintJacobian.emplace_back(j.constraintOffset + i, col, rows(i, col));
-  }
-  for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
-    const ConstraintEvaluation c =
-        evaluateJointConstraint(w.weld, poseOfNode(nodes_[w.node]), poseOf(data_, w.virtualBody));
-    const Eigen::MatrixXd rows = c.jacobianChild * B.middleRows<6>(6 * w.virtualBody);
-    for (int col : supportColumns_[w.virtualBody])
-      for (int i = 0; i < 6; ++i) constraintJacobian.emplace_back(w.constraintOffset + i, col, rows(i, col));
-  }
+  constraintRows(false, constraintJacobian);
   if (cC != 0.0 || cK != 0.0) {
     VectorXd r0, r1, phi;
     rigidResidual(t, q, v, vdot, lambda, r0, phi);
@@ -256,25 +247,241 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
       if (ratesCoupled_(i, j)) iteration.emplace_back(i, j, S(i, j));
 }
 
+// Constraint rows: drives on their joint rates; cut joints and flexible body
+// joints over the bodies they join, Phi_Z, either mapped to the joint rates
+// that move those bodies (Phi_q = Phi_Z B: joint-space form) or over the
+// auxiliary body-level unknowns (bodyColumns: the recursive form); node
+// columns Phi_node W P. After forwardKinematics, with nodes_ current.
+void System::constraintRows(bool bodyColumns, Triplets& constraintJacobian) {
+  if (!bodyColumns && model_.constraintCount > 0) computeVelocityTransformation(model_, data_);
+  const Eigen::MatrixXd& B = data_.velocityTransformation;
+  // Rows of Phi_b [dr_b; dphi_b] for a body b.
+  auto bodyBlock = [&](int row, int body, const ConstraintJacobian& J) {
+    if (body == kGroundIndex) return;
+    if (bodyColumns) {
+      for (int c = 0; c < 6; ++c)
+        for (int i = 0; i < J.rows(); ++i) constraintJacobian.emplace_back(row + i, bodyUnknown(body) + c, J(i, c));
+      return;
+    }
+    const Eigen::MatrixXd rows = J * B.middleRows<6>(6 * body);
+    for (int col : supportColumns_[body])
+      for (int i = 0; i < J.rows(); ++i) constraintJacobian.emplace_back(row + i, col, rows(i, col));
+  };
+  for (const Joint& j : model_.joints) {
+    if (j.driven) constraintJacobian.emplace_back(j.constraintOffset, j.velocityOffset, 1.0);
+    if (!j.cut) continue;
+    const int parent = j.parentMarker.body, child = j.childMarker.body;
+    const ConstraintEvaluation c = evaluateJointConstraint(constraintOf(j), poseOf(data_, parent), poseOf(data_, child));
+    if (bodyColumns || parent == kGroundIndex) {
+      bodyBlock(j.constraintOffset, parent, c.jacobianParent);
+      bodyBlock(j.constraintOffset, child, c.jacobianChild);
+      continue;
+    }
+    // Joint space: the two bodies' rows summed over the rates that move them.
+    const Eigen::MatrixXd rows = c.jacobianChild * B.middleRows<6>(6 * child) + c.jacobianParent * B.middleRows<6>(6 * parent);
+    std::vector<int> columns = supportColumns_[parent];
+    columns.insert(columns.end(), supportColumns_[child].begin(), supportColumns_[child].end());
+    std::sort(columns.begin(), columns.end());
+    columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
+    for (int col : columns)
+      for (int i = 0; i < rows.rows(); ++i) constraintJacobian.emplace_back(j.constraintOffset + i, col, rows(i, col));
+  }
+  for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
+    const NodeState& n = nodes_[w.node];
+    const FlexNode& node = model_.flexible.nodes[w.node];
+    const ConstraintEvaluation c = evaluateJointConstraint(w.weld, poseOfNode(n), poseOf(data_, w.virtualBody));
+    bodyBlock(w.constraintOffset, w.virtualBody, c.jacobianChild);
+    const Mat6 rows = c.jacobianParent * nodeVariation(n) * node.P;
+    for (int i = 0; i < 6; ++i)
+      for (int k = 0; k < 6; ++k)
+        if (node.dof[k] >= 0) constraintJacobian.emplace_back(w.constraintOffset + i, node.dof[k], rows(i, k));
+  }
+}
+
+void System::constraintJacobian(double t, const Configuration& q, const VectorXd& v, Triplets& jacobian) {
+  const VectorXd zero = VectorXd::Zero(model_.velocityCount);
+  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, zero, t, drives_, flexibleInputs_, nodes_);
+  if (!model_.bodies.empty()) forwardKinematics(model_, data_, q, v, zero);
+  constraintRows(false, jacobian);
+}
+
+int System::auxiliaryCount(double cM) const {
+  return recursiveMatrix_ && cM != 0.0 ? 12 * int(model_.bodies.size()) : 0;
+}
+
+// Body by body from the leaves in, each body's velocity variation pivoting
+// on its recursion row (unit pivot), its wrench on its balance row (unit),
+// then its joint rates on their own rows (the articulated inertia S^T H S
+// by then): the elimination of the articulated-body recursion, no fill
+// beyond each body's parent. Multipliers and flexible DOFs follow.
+std::vector<std::pair<int, int>> System::pivotOrder(double cM) const {
+  std::vector<std::pair<int, int>> order;
+  if (auxiliaryCount(cM) == 0) return order;
+  for (int i = int(model_.bodies.size()) - 1; i >= 0; --i) {
+    for (int d = 0; d < 6; ++d) order.emplace_back(wrenchUnknown(i) + d, bodyUnknown(i) + d);
+    for (int d = 0; d < 6; ++d) order.emplace_back(bodyUnknown(i) + d, wrenchUnknown(i) + d);
+    const Joint& jt = model_.joints[model_.bodies[i].inboardJoint];
+    for (int d = 0; d < jt.dofs; ++d) order.emplace_back(jt.velocityOffset + d, jt.velocityOffset + d);
+  }
+  return order;
+}
+
 void System::tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                      const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                      Triplets& constraintJacobian) {
+  const bool recursive = auxiliaryCount(cM) > 0;
   if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
-  if (!model_.bodies.empty()) rigidTangent(t, q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
+  if (recursive)
+    recursiveTangent(q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
+  else if (!model_.bodies.empty())
+    rigidTangent(t, q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
+  else
+    constraintRows(false, constraintJacobian);
   if (!model_.flexible.empty()) {
     const bool inertia = model_.analysis == Analysis::Dynamic;
     flexibleTangent(model_.flexible, nodes_, flexibleInputs_, t, inertia ? cM : 0.0, inertia ? cC : 0.0, cK,
                     iteration);
-    weldTangent(lambda, cK, iteration, constraintJacobian);
+    weldTangent(lambda, cK, recursive, iteration);
   }
 }
 
-// The flexible body joints' blocks that the rigid finite differences do not
-// see (they hold the nodes fixed): node columns of the rows, Phi_node W P;
-// and the geometric stiffness K = d(Phi_z^T lambda)/dz between node and
-// virtual body, mapped by W P (node) and B (virtual body), plus the turning
-// of the node frame in W^T: d(A^T N)/dtheta = skew(A^T N).
-void System::weldTangent(const VectorXd& lambda, double cK, Triplets& iteration, Triplets& constraintJacobian) const {
+// The recursive formulation's own Newton matrix, sparse and O(n) for a tree
+// of n bodies where the joint-space B^T M B is dense (a chain). Besides the
+// joint-rate corrections x it carries, per body, the variation y of its
+// [velocity; angular velocity] (world, centre of mass) and the variation z
+// of the wrench its inboard joint passes to its subtree:
+//   x rows:  A x + S^T z                     = r     (A: joint springs, dampers)
+//   y rows:  H y - (I - P)^T z + Phi_Z^T dl  = 0     (subtree wrench balance)
+//   z rows:  S x - (I - P) y                 = 0     (y = T y_parent + S x)
+// with T the rigid transfer from the parent's centre of mass and H the
+// body-level tangent cM M + cC C + cK K. Eliminating y and z leaves
+// A + B^T H B: the mass block B^T M B exactly (so consistent accelerations,
+// velocity jumps and the leading term of Newton's matrix are those of the
+// joint-space form), damping and stiffness of inertia, force elements and
+// cut joints at body level. Left out: the variation of B itself (dB/dq of
+// the transmitted wrenches, the Coriolis part of Bdot qdot), terms of
+// relative size h omega and h^2 |f| / (m L): Newton converges linearly
+// rather than quadratically there, to the same answer (the residual is
+// exact). Statics (cM = 0) has only such terms: it uses the joint space.
+void System::recursiveTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+                              const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
+                              Triplets& constraintJacobian) {
+  const int nb = int(model_.bodies.size());
+  forwardKinematics(model_, data_, q, v, vdot);
+  // Blocks are written with every entry that can be nonzero, zeros
+  // included, so that the pattern never changes: in full where they couple
+  // poses, by their structure where that is fixed (unit diagonals, the
+  // rigid transfer's lever arm, a body's mass and rotary inertia).
+  auto block = [&](int row, int col, const Mat6& M) {
+    for (int k = 0; k < 6; ++k)
+      for (int i = 0; i < 6; ++i) iteration.emplace_back(row + i, col + k, M(i, k));
+  };
+  auto diagonal = [&](int row, int col, double value) {
+    for (int i = 0; i < 6; ++i) iteration.emplace_back(row + i, col + i, value);
+  };
+  auto corner = [&](int row, int col, const Mat3& M) {  // the 3 x 3 block at (row, col)
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 3; ++i) iteration.emplace_back(row + i, col + k, M(i, k));
+  };
+  for (int i = 0; i < nb; ++i) {
+    const Body& b = model_.bodies[i];
+    const BodyKinematics& k = data_.body[i];
+    const Mat3 J = k.orientation * b.inertia * k.orientation.transpose();
+    const Vec3& w = k.angularVelocity;
+    const Mat3 gyroscopic = skew(w) * J - skew(J * w);  // d(w x J w)/dw
+    // d(J alpha + w x J w)/dphi, J = A J0 A^T turned by dphi.
+    const Mat3 turning =
+        J * skew(k.angularAcceleration) - skew(J * k.angularAcceleration) + skew(w) * (J * skew(w) - skew(J * w));
+    // H = [cM m I, 0; 0, cM J + cC gyroscopic + cK turning].
+    for (int d = 0; d < 3; ++d) iteration.emplace_back(bodyUnknown(i) + d, bodyUnknown(i) + d, cM * b.mass);
+    corner(bodyUnknown(i) + 3, bodyUnknown(i) + 3, cM * J + cC * gyroscopic + cK * turning);
+    diagonal(bodyUnknown(i), wrenchUnknown(i), -1.0);
+    diagonal(wrenchUnknown(i), bodyUnknown(i), -1.0);
+    if (b.parent != kGroundIndex) {
+      // T = [I, -skew(dr); 0, I]: v_i = v_p + w_p x dr.
+      const Mat3 lever = -skew(k.position - data_.body[b.parent].position);
+      diagonal(wrenchUnknown(i), bodyUnknown(b.parent), 1.0);
+      corner(wrenchUnknown(i), bodyUnknown(b.parent) + 3, lever);
+      diagonal(bodyUnknown(b.parent), wrenchUnknown(i), 1.0);
+      corner(bodyUnknown(b.parent) + 3, wrenchUnknown(i), lever.transpose());
+    }
+    const Joint& jt = model_.joints[b.inboardJoint];
+    const Matrix6X& S = data_.joint[b.inboardJoint].motionSubspace;
+    for (int d = 0; d < jt.dofs; ++d) {
+      const int x = jt.velocityOffset + d;
+      for (int r = 0; r < 6; ++r) {
+        iteration.emplace_back(wrenchUnknown(i) + r, x, S(r, d));
+        iteration.emplace_back(x, wrenchUnknown(i) + r, S(r, d));
+      }
+      // Joint springs and dampers act on the joint's own rates.
+      double a = cC * (jt.damping + jt.springDamping);
+      if (d == 0) a += cK * jt.springStiffness;
+      iteration.emplace_back(x, x, a);
+    }
+  }
+  forceElementTangent(cC, cK, iteration);
+  if (cK != 0.0 && lambda.size() > 0)
+    for (const Joint& j : model_.joints) {
+      if (!j.cut) continue;
+      const int parent = j.parentMarker.body, child = j.childMarker.body;
+      const GeometricStiffness K =
+          constraintGeometricStiffness(constraintOf(j), poseOf(data_, parent), poseOf(data_, child),
+                                       lambda.segment(j.constraintOffset, mfbd::constraintCount(j.type)));
+      const int ends[2] = {parent, child};
+      for (int a = 0; a < 2; ++a)
+        for (int c = 0; c < 2; ++c)
+          if (ends[a] != kGroundIndex && ends[c] != kGroundIndex)
+            block(bodyUnknown(ends[a]), bodyUnknown(ends[c]), cK * K.block<6, 6>(6 * a, 6 * c));
+    }
+  constraintRows(true, constraintJacobian);
+}
+
+// Body-level stiffness and damping of the force elements, -dQ/d(pose) and
+// -dQ/d(twist) of each element's wrenches, by finite differences of that
+// element alone (6 evaluations per body it touches).
+void System::forceElementTangent(double cC, double cK, Triplets& iteration) {
+  if (cC == 0.0 && cK == 0.0) return;
+  const double eps = 1e-7;
+  for (const ForceElement& e : model_.forces) {
+    const int ends[2] = {e.marker1.body, e.kind == ForceElement::Kind::AppliedForce ? kGroundIndex : e.marker2.body};
+    const ForceElementWrenches w0 = forceElementWrenches(e, forceInputs_, data_);
+    for (int side = 0; side < 2; ++side) {
+      const int moved = ends[side];
+      if (moved == kGroundIndex) continue;
+      BodyKinematics& k = data_.body[moved];
+      const BodyKinematics saved = k;
+      for (int d = 0; d < 6; ++d) {
+        // Pose by eps e_d and twist by (cC/cK) eps e_d: the difference
+        // quotient is K e_d + (cC/cK) C e_d (the twist alone when cK = 0).
+        const double twist = cK != 0.0 ? cC / cK * eps : eps;
+        if (cK != 0.0) {
+          if (d < 3) k.position[d] += eps;
+          else k.orientation = expSO3(eps * Vec3::Unit(d - 3)) * k.orientation;
+        }
+        if (d < 3) k.velocity[d] += twist;
+        else k.angularVelocity[d - 3] += twist;
+        const ForceElementWrenches w1 = forceElementWrenches(e, forceInputs_, data_);
+        k = saved;
+        const double factor = -(cK != 0.0 ? cK : cC) / eps;
+        for (int on = 0; on < 2; ++on) {
+          if (ends[on] == kGroundIndex) continue;
+          const Vec6 dw = on == 0 ? Vec6(w1.onBody1 - w0.onBody1) : Vec6(w1.onBody2 - w0.onBody2);
+          for (int i = 0; i < 6; ++i) iteration.emplace_back(bodyUnknown(ends[on]) + i, bodyUnknown(moved) + d, factor * dw[i]);
+        }
+      }
+    }
+  }
+}
+
+// The flexible body joints' geometric stiffness K = d(Phi_z^T lambda)/dz
+// between node and virtual body: node-node, mapped by W P, plus the turning
+// of the node frame in W^T: d(A^T N)/dtheta = skew(A^T N); node-body and
+// body-node blocks over the virtual body's joint rates (B) or, in the
+// recursive form, over its body-level unknowns, where the body-body block
+// joins them (the joint-space finite differences of the rigid residual
+// hold that one already).
+void System::weldTangent(const VectorXd& lambda, double cK, bool bodyColumns, Triplets& iteration) const {
+  if (cK == 0.0 || lambda.size() == 0) return;
   const Eigen::MatrixXd& B = data_.velocityTransformation;  // current: rigidTangent computed it
   for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
     const NodeState& n = nodes_[w.node];
@@ -282,23 +489,33 @@ void System::weldTangent(const VectorXd& lambda, double cK, Triplets& iteration,
     const BodyPose nodePose = poseOfNode(n), bodyPose = poseOf(data_, w.virtualBody);
     const ConstraintEvaluation c = evaluateJointConstraint(w.weld, nodePose, bodyPose);
     const Mat6 WP = nodeVariation(n) * node.P;
-    const Mat6 rows = c.jacobianParent * WP;
-    for (int i = 0; i < 6; ++i)
-      for (int k = 0; k < 6; ++k)
-        if (node.dof[k] >= 0) constraintJacobian.emplace_back(w.constraintOffset + i, node.dof[k], rows(i, k));
-    if (cK == 0.0 || lambda.size() == 0) continue;
     const auto l = lambda.segment<6>(w.constraintOffset);
     const GeometricStiffness K = constraintGeometricStiffness(w.weld, nodePose, bodyPose, l);
     Mat6 nodeNode = WP.transpose() * K.topLeftCorner<6, 6>() * WP;
     const Vec3 moment = n.pose.A.transpose() * (c.jacobianParent.transpose() * l).tail<3>();
     nodeNode += node.P.transpose().rightCols<3>() * skew(moment) * node.P.bottomRows<3>();
+    for (int k = 0; k < 6; ++k)
+      for (int l2 = 0; l2 < 6; ++l2)
+        if (node.dof[k] >= 0 && node.dof[l2] >= 0)
+          iteration.emplace_back(node.dof[k], node.dof[l2], cK * nodeNode(k, l2));
+    if (bodyColumns) {
+      const Mat6 nodeBody = WP.transpose() * K.topRightCorner<6, 6>(), bodyNode = K.bottomLeftCorner<6, 6>() * WP;
+      const int y = bodyUnknown(w.virtualBody);
+      for (int k = 0; k < 6; ++k)
+        for (int c2 = 0; c2 < 6; ++c2) {
+          if (node.dof[k] >= 0) {
+            iteration.emplace_back(node.dof[k], y + c2, cK * nodeBody(k, c2));
+            iteration.emplace_back(y + c2, node.dof[k], cK * bodyNode(c2, k));
+          }
+          iteration.emplace_back(y + k, y + c2, cK * K(6 + k, 6 + c2));
+        }
+      continue;
+    }
     const Eigen::Matrix<double, 6, Eigen::Dynamic> Bv = B.middleRows<6>(6 * w.virtualBody);
     const Eigen::Matrix<double, 6, Eigen::Dynamic> nodeRigid = WP.transpose() * K.topRightCorner<6, 6>() * Bv;
     const Eigen::Matrix<double, Eigen::Dynamic, 6> rigidNode = Bv.transpose() * K.bottomLeftCorner<6, 6>() * WP;
     for (int k = 0; k < 6; ++k) {
       if (node.dof[k] < 0) continue;
-      for (int l2 = 0; l2 < 6; ++l2)
-        if (node.dof[l2] >= 0) iteration.emplace_back(node.dof[k], node.dof[l2], cK * nodeNode(k, l2));
       for (int col : supportColumns_[w.virtualBody]) {
         iteration.emplace_back(node.dof[k], col, cK * nodeRigid(k, col));
         iteration.emplace_back(col, node.dof[k], cK * rigidNode(col, k));

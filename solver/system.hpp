@@ -43,7 +43,15 @@ class System : public Dynamics {
                 VectorXd& r, VectorXd& phi) override;
   void tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian) override;
+  // Auxiliary unknowns of the recursive Newton matrix (see recursiveTangent):
+  // 12 per body, in dynamics (cM != 0) when the model uses that form.
+  int auxiliaryCount(double cM) const override;
+  bool recursiveNewtonMatrix() const { return recursiveMatrix_; }
+  std::vector<std::pair<int, int>> pivotOrder(double cM) const override;
   VectorXd constraintAccelerationTerm(double t, const Configuration& q, const VectorXd& v) override;
+  // Phi_q over the joint rates and node DOFs (joint space, whatever form
+  // the Newton matrix takes): for assembly and the constraints' rank.
+  void constraintJacobian(double t, const Configuration& q, const VectorXd& v, Triplets& jacobian);
   double constraintLengthScale() const override { return constraintLengthScale_; }
 
   // Force and torque a cut joint passes to its child (child marker frame,
@@ -66,7 +74,15 @@ class System : public Dynamics {
                     double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
   void jointForces(const Configuration& q, const VectorXd& v, VectorXd& tau) const;
   void weldForcesOnNodes(const VectorXd& lambda, VectorXd& r) const;
-  void weldTangent(const VectorXd& lambda, double cK, Triplets& iteration, Triplets& constraintJacobian) const;
+  void recursiveTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
+                        double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
+  void forceElementTangent(double cC, double cK, Triplets& iteration);
+  void constraintRows(bool bodyColumns, Triplets& constraintJacobian);
+  void weldTangent(const VectorXd& lambda, double cK, bool bodyColumns, Triplets& iteration) const;
+  // Indices of body i's velocity variation y_i and subtree wrench z_i among
+  // the Newton matrix's unknowns (auxiliary, after the velocities).
+  int bodyUnknown(int i) const { return model_.velocityCount + 6 * i; }
+  int wrenchUnknown(int i) const { return model_.velocityCount + 6 * (int(model_.bodies.size()) + i); }
 
   Model model_;
   Data data_;
@@ -77,6 +93,7 @@ class System : public Dynamics {
   std::vector<NodeState> nodes_;
   VectorXd tau_, rigid_;
   double constraintLengthScale_ = 1.0;  // of the last residual
+  bool recursiveMatrix_ = false;  // Newton matrix in the recursive form (dynamics)
   // Sparsity of the rigid tangent: the joint rates that move each body (its
   // path to ground), and which pairs of rates can couple at all (see the
   // constructor). Fixed by the topology, so the pattern never changes.

@@ -27,9 +27,20 @@ class Dynamics {
   virtual VectorXd constraintAccelerationTerm(double t, const Configuration& q, const VectorXd& v) = 0;
   // Appends cM M + cC dr/dv + cK dr/dq (derivative along the retraction) to
   // `iteration`, and Phi_q to `constraintJacobian` (rows from 0).
+  // A system may write its matrix with auxiliary unknowns that keep it
+  // sparse (a long rigid tree: body-level variations instead of the dense
+  // B^T M B): indices velocityCount() .. + auxiliaryCount(cM) of both lists
+  // name them. Their residual rows are zero and their solution is dropped;
+  // the velocity block of the Newton matrix is the Schur complement.
   virtual void tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                        const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                        Triplets& constraintJacobian) = 0;
+  virtual int auxiliaryCount(double /*cM*/) const { return 0; }
+  // Optionally, the order in which to eliminate the matrix: pivots as
+  // (row, column) pairs in the indices of tangent(), the rest after them.
+  // A tree's body blocks from the leaves in (the recursion's own order)
+  // factorise with no fill and unit pivots; empty: the solver chooses.
+  virtual std::vector<std::pair<int, int>> pivotOrder(double /*cM*/) const { return {}; }
   // Size of the world positions (m) the constraint rows of the last residual
   // were computed from: their round-off is a few ulps of it, which no Newton
   // correction can remove (a 40 m long chain of bodies: ~1e-14 m).

@@ -23,12 +23,14 @@ bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std:
   const int n = system.velocityCount(), m = system.constraintCount();
   state.vdot = VectorXd::Zero(n);
   state.lambda = VectorXd::Zero(m);
-  VectorXd r, phi, rhs(n + m);
+  VectorXd r, phi;
   system.residual(state.t, state.q, state.v, state.vdot, state.lambda, r, phi);
-  rhs << -r, (m > 0 ? VectorXd(-system.constraintAccelerationTerm(state.t, state.q, state.v)) : VectorXd());
   LinearSolver mass;
   const SparseMatrix S = iterationMatrix(system, state, 1.0, 0.0, 0.0);
-  mass.analyzePattern(S);
+  VectorXd rhs = VectorXd::Zero(S.rows());
+  rhs.head(n) = -r;
+  if (m > 0) rhs.segment(n, m) = -system.constraintAccelerationTerm(state.t, state.q, state.v);
+  mass.analyzePattern(S, pivotOrder(system, 1.0));
   if (mass.factorize(S) != LinearSolver::Status::Ok) {
     message = "the mass matrix is singular at the initial configuration";
     return false;
@@ -41,7 +43,7 @@ bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std:
     for (int sweep = 0; sweep < 3; ++sweep) x += mass.solve(rhs - exact * x);
   }
   state.vdot = x.head(n);
-  state.lambda = x.tail(m);
+  state.lambda = x.segment(n, m);
   state.a = state.vdot;
   if (!allFinite(state.vdot) || !allFinite(state.lambda)) {
     message = "initial accelerations are not finite";
@@ -70,17 +72,17 @@ bool GeneralizedAlpha::restartAfterInputJump(Dynamics& system, IntegratorState& 
   }
   const SparseMatrix S = newtonMatrix(system, s, s.h > 0.0 ? s.h : options_.hMax);
   LinearSolver solver;
-  solver.analyzePattern(S);
+  solver.analyzePattern(S, pivotOrder(system, 1.0));
   if (solver.factorize(S) != LinearSolver::Status::Ok) {
     message = "singular iteration matrix after the input change";
     return false;
   }
-  VectorXd rhs = VectorXd::Zero(n + m);
+  VectorXd rhs = VectorXd::Zero(S.rows());
   rhs.head(n) = -r;
   const VectorXd jump = solver.solve(rhs);
   s.vdot += jump.head(n);
   s.a += jump.head(n);
-  s.lambda += jump.tail(m);
+  s.lambda += jump.segment(n, m);
   return true;
 }
 
@@ -98,10 +100,11 @@ SparseMatrix GeneralizedAlpha::newtonMatrix(Dynamics& system, const IntegratorSt
 bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial, double h) {
   const MatrixFactors c = matrixFactors(h);
   if (assembleIterationMatrix(system, trial, c.cM, c.cC, c.cK))
-    solver_.analyzePattern(assembledIterationMatrix());
+    solver_.analyzePattern(assembledIterationMatrix(), pivotOrder(system, c.cM));
   if (solver_.factorize(assembledIterationMatrix()) != LinearSolver::Status::Ok) return false;
   factoredStep_ = h;
-  correctionNoise_ = constraintNoise(system, system.velocityCount(), system.constraintCount());
+  correctionNoise_ = constraintNoise(system, system.velocityCount(), system.constraintCount(),
+                                     assembledIterationMatrix().rows());
   return true;
 }
 
@@ -111,10 +114,10 @@ bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial,
 // closed-loop mechanism nears a singular configuration, where a fixed
 // floor would reject converged steps. Estimated by one solve with a
 // pseudo-random sign pattern of the rows' round-off level.
-double GeneralizedAlpha::constraintNoise(const Dynamics& system, int n, int m) const {
+double GeneralizedAlpha::constraintNoise(const Dynamics& system, int n, int m, int size) const {
   if (m == 0) return 0.0;
   const double level = 16.0 * std::numeric_limits<double>::epsilon() * system.constraintLengthScale();
-  VectorXd rhs = VectorXd::Zero(n + m);
+  VectorXd rhs = VectorXd::Zero(size);
   unsigned pattern = 12345u;
   for (int i = 0; i < m; ++i) {
     pattern = pattern * 1103515245u + 12345u;
@@ -139,7 +142,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
   trial.q = s.q;
   system.retract(trial.q, hDeltaQ);
 
-  VectorXd r, phi, rhs(n + m);
+  VectorXd r, phi, rhs;
   double previous = 0.0;
   // Corrections cannot resolve below a few ulps of the coordinates, nor
   // below the noise the constraints' round-off makes (constraintNoise).
@@ -164,7 +167,9 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     }
     // The constraints are met to the tolerance or to their round-off.
     const double phiFloor = 64.0 * std::numeric_limits<double>::epsilon() * system.constraintLengthScale();
-    rhs << -r / betaPrime, -phi;
+    rhs.setZero(assembledIterationMatrix().rows());
+    rhs.head(n) = -r / betaPrime;
+    rhs.segment(n, m) = -phi;
     const VectorXd delta = solver_.solve(rhs);
     ++s.newtonIterations;
     const double size = delta.head(n).cwiseAbs().maxCoeff();
@@ -178,7 +183,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     trial.v += gammaPrime * delta.head(n);
     trial.vdot += betaPrime * delta.head(n);
     trial.a += aPerVdot * betaPrime * delta.head(n);
-    trial.lambda += betaPrime * delta.tail(m);
+    trial.lambda += betaPrime * delta.segment(n, m);
     // Converged when the error left after this correction is below the
     // tolerance: with contraction rate rho it is about rho / (1 - rho) times
     // the correction (Hairer & Wanner IV.8), which matters for modified

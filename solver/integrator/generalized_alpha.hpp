@@ -37,7 +37,7 @@ class GeneralizedAlpha : public TimeStepper {
     double cM, cC, cK;
   };
   MatrixFactors matrixFactors(double h) const;
-  double constraintNoise(const Dynamics& system, int n, int m) const;
+  double constraintNoise(const Dynamics& system, int n, int m, int size) const;
 
   double alphaM_, alphaF_, gamma_, beta_;
   LinearSolver solver_;

@@ -35,6 +35,14 @@ bool SparseAssembly::assign(int size, const std::vector<Eigen::Triplet<double>>&
   return true;
 }
 
+namespace {
+// KLU's user ordering hook: keep the columns as given (pre-permuted).
+int32_t keepOrder(int32_t n, int32_t*, int32_t*, int32_t* permutation, klu_common*) {
+  for (int32_t i = 0; i < n; ++i) permutation[i] = i;
+  return 1;
+}
+}  // namespace
+
 // KLU through its C interface rather than Eigen's wrapper, for klu_refactor:
 // a matrix of the analysed pattern is refactorised with the pivot order of
 // the last full factorization (no pivot search, no depth-first search per
@@ -54,8 +62,15 @@ struct KluFactors {
     if (numeric) klu_free_numeric(&numeric, &common);
     if (symbolic) klu_free_symbolic(&symbolic, &common);
   }
-  bool analyze(const SparseMatrix& A) {
+  // ordered: eliminate in the columns' given order (pre-permuted), one block.
+  bool analyze(const SparseMatrix& A, bool ordered) {
     release();
+    klu_defaults(&common);
+    if (ordered) {
+      common.ordering = 3;  // the user's: keepOrder
+      common.user_order = keepOrder;
+      common.btf = 0;  // one block, in the given order
+    }
     symbolic = klu_analyze(int(A.rows()), const_cast<int*>(A.outerIndexPtr()), const_cast<int*>(A.innerIndexPtr()),
                            &common);
     return symbolic != nullptr;
@@ -84,7 +99,14 @@ struct KluFactors {
 };
 
 struct LinearSolver::Impl {
+  using Permutation = Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int>;
   bool sparse = false;
+  // A given pivot order: rows and columns permuted before KLU (position k
+  // holds pivot k), which then keeps that order.
+  bool ordered = false;
+  std::vector<std::pair<int, int>> pivotOrder;
+  Permutation rows, columns;
+  SparseMatrix permuted;
   Eigen::PartialPivLU<Eigen::MatrixXd> dense;
   // KLU holds raw SuiteSparse handles and cannot be copied; a copy of the
   // solver (state saving) re-analyses lazily.
@@ -97,33 +119,56 @@ LinearSolver::~LinearSolver() = default;
 LinearSolver::LinearSolver(const LinearSolver& other) : impl_(std::make_unique<Impl>()) {
   impl_->sparse = other.impl_->sparse;
   impl_->dense = other.impl_->dense;
+  impl_->pivotOrder = other.impl_->pivotOrder;
 }
 LinearSolver& LinearSolver::operator=(const LinearSolver& other) {
-  if (this != &other) {
-    impl_ = std::make_unique<Impl>();
-    impl_->sparse = other.impl_->sparse;
-    impl_->dense = other.impl_->dense;
-  }
+  if (this != &other) impl_ = std::move(LinearSolver(other).impl_);
   return *this;
 }
 
 bool LinearSolver::usesSparse() const { return impl_->sparse; }
 
-void LinearSolver::analyzePattern(const SparseMatrix& A) {
+void LinearSolver::analyzePattern(const SparseMatrix& A, const std::vector<std::pair<int, int>>& pivotOrder) {
   // Dense LU also for a matrix that is dense anyway (joint coordinates of a
   // long closed chain: B^T M B and Phi_q B fill it), where KLU's sparse
   // kernel is slower.
   const double size = double(A.rows());
-  impl_->sparse = A.rows() > kDenseThreshold && !(A.rows() <= kDenseMaximum && A.nonZeros() > 0.2 * size * size);
+  if (&pivotOrder != &impl_->pivotOrder) impl_->pivotOrder = pivotOrder;
+  impl_->ordered = !pivotOrder.empty();
+  impl_->sparse = impl_->ordered ||
+                  (A.rows() > kDenseThreshold && !(A.rows() <= kDenseMaximum && A.nonZeros() > 0.2 * size * size));
   if (!impl_->sparse) return;
   impl_->klu = std::make_unique<KluFactors>();
-  impl_->analyzed = impl_->klu->analyze(A);
+  if (impl_->ordered) {
+    const int n = int(A.rows());
+    std::vector<int> rowAt(n, -1), columnAt(n, -1);  // new position of each row / column
+    int k = 0;
+    for (const auto& [row, column] : pivotOrder) {
+      rowAt[row] = k;
+      columnAt[column] = k++;
+    }
+    for (int i = 0, r = k, c = k; i < n; ++i) {
+      if (rowAt[i] < 0) rowAt[i] = r++;
+      if (columnAt[i] < 0) columnAt[i] = c++;
+    }
+    impl_->rows.indices() = Eigen::Map<Eigen::VectorXi>(rowAt.data(), n);
+    impl_->columns.indices() = Eigen::Map<Eigen::VectorXi>(columnAt.data(), n);
+    impl_->permuted = impl_->rows * A * impl_->columns.transpose();
+    impl_->analyzed = impl_->klu->analyze(impl_->permuted, true);
+  } else {
+    impl_->analyzed = impl_->klu->analyze(A, false);
+  }
 }
 
 LinearSolver::Status LinearSolver::factorize(const SparseMatrix& A) {
   if (impl_->sparse) {
-    if (!impl_->analyzed) analyzePattern(A);
-    return impl_->analyzed && impl_->klu->factorize(A) ? Status::Ok : Status::Singular;
+    if (!impl_->analyzed) analyzePattern(A, impl_->pivotOrder);
+    if (!impl_->analyzed) return Status::Singular;
+    if (impl_->ordered) {
+      impl_->permuted = impl_->rows * A * impl_->columns.transpose();
+      return impl_->klu->factorize(impl_->permuted) ? Status::Ok : Status::Singular;
+    }
+    return impl_->klu->factorize(A) ? Status::Ok : Status::Singular;
   }
   const Eigen::MatrixXd dense(A);
   impl_->dense.compute(dense);
@@ -139,6 +184,7 @@ LinearSolver::Status LinearSolver::factorize(const SparseMatrix& A) {
 }
 
 Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) const {
+  if (impl_->sparse && impl_->ordered) return impl_->columns.transpose() * impl_->klu->solve(impl_->rows * b);
   if (impl_->sparse) return impl_->klu->solve(b);
   return impl_->dense.solve(b);
 }

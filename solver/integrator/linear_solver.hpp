@@ -42,8 +42,11 @@ class LinearSolver {
   LinearSolver(const LinearSolver&);
   LinearSolver& operator=(const LinearSolver&);
 
-  // Symbolic analysis; call again only when the pattern changes.
-  void analyzePattern(const SparseMatrix& A);
+  // Symbolic analysis; call again only when the pattern changes. With a
+  // pivot order (row, column pairs, possibly fewer than the size), the
+  // sparse LU eliminates those first, in that order, then the rest in
+  // index order; pivoting still guards each pivot's size.
+  void analyzePattern(const SparseMatrix& A, const std::vector<std::pair<int, int>>& pivotOrder = {});
   Status factorize(const SparseMatrix& A);
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
   bool usesSparse() const;

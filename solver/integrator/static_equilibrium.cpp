@@ -43,7 +43,7 @@ bool StaticEquilibrium::substep(Dynamics& system, IntegratorState& s, double h, 
 // Full Newton: the tangent stiffness is refactorised at every iteration.
 bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, VectorXd& increment, std::string& why) {
   const int n = system.velocityCount(), m = system.constraintCount();
-  VectorXd r, phi, rhs(n + m);
+  VectorXd r, phi, rhs;
   for (int k = 0; k < options_.maxIterations; ++k) {
     system.residual(s.t, s.q, s.v, s.vdot, s.lambda, r, phi);
     if (!r.allFinite() || !phi.allFinite()) {
@@ -56,7 +56,9 @@ bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, VectorXd& in
       why = "singular tangent stiffness (an unsupported rigid-body mode, or a limit point)";
       return false;
     }
-    rhs << -r, -phi;
+    rhs.setZero(assembledIterationMatrix().rows());
+    rhs.head(n) = -r;
+    rhs.segment(n, m) = -phi;
     const VectorXd delta = solver_.solve(rhs);
     ++s.newtonIterations;
     const double size = delta.head(n).cwiseAbs().maxCoeff();
@@ -66,7 +68,7 @@ bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, VectorXd& in
     }
     system.retract(s.q, delta.head(n));
     increment += delta.head(n);
-    s.lambda += delta.tail(m);
+    s.lambda += delta.segment(n, m);
     if (size <= options_.tolerance && (m == 0 || phi.cwiseAbs().maxCoeff() <= options_.tolerance)) return true;
   }
   std::ostringstream msg;

@@ -6,16 +6,34 @@
 
 namespace mfbd {
 
+// Unknowns of the Newton matrix: velocities (n), multipliers (m), then the
+// system's auxiliary unknowns (a), which its triplets index from n on.
+int TimeStepper::newtonSize(const Dynamics& system, double cM) {
+  return system.velocityCount() + system.constraintCount() + system.auxiliaryCount(cM);
+}
+
+std::vector<std::pair<int, int>> TimeStepper::pivotOrder(const Dynamics& system, double cM) {
+  const int n = system.velocityCount(), m = system.constraintCount();
+  std::vector<std::pair<int, int>> order = system.pivotOrder(cM);
+  for (auto& [row, column] : order) {
+    if (row >= n) row += m;
+    if (column >= n) column += m;
+  }
+  return order;
+}
+
 void TimeStepper::iterationTriplets(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
                                     bool regularize, Triplets& all, Triplets& jacobian) {
   const int n = system.velocityCount(), m = system.constraintCount();
   all.clear();
   jacobian.clear();
   system.tangent(at.t, at.q, at.v, at.vdot, at.lambda, cM, cC, cK, all, jacobian);
+  auto place = [&](int index) { return index < n ? index : index + m; };
+  for (auto& t : all) t = Eigen::Triplet<double>(place(t.row()), place(t.col()), t.value());
   all.reserve(all.size() + 2 * jacobian.size() + n + m);
   for (const auto& t : jacobian) {
-    all.emplace_back(n + t.row(), t.col(), t.value());
-    all.emplace_back(t.col(), n + t.row(), t.value());
+    all.emplace_back(n + t.row(), place(t.col()), t.value());
+    all.emplace_back(place(t.col()), n + t.row(), t.value());
   }
   // Every diagonal entry structurally present: the pattern stays the same.
   for (int i = 0; i < n; ++i) all.emplace_back(i, i, 0.0);
@@ -27,7 +45,7 @@ void TimeStepper::iterationTriplets(Dynamics& system, const IntegratorState& at,
   if (m > 0) {
     double sMax = 0.0, gMax = 0.0;
     for (const auto& t : all)
-      if (t.row() == t.col() && t.row() < n) sMax = std::max(sMax, std::abs(t.value()));
+      if (t.row() == t.col() && (t.row() < n || t.row() >= n + m)) sMax = std::max(sMax, std::abs(t.value()));
     for (const auto& t : jacobian) gMax = std::max(gMax, std::abs(t.value()));
     const double eps = !regularize ? 0.0 : sMax > 0.0 ? 1e-8 * gMax * gMax / sMax : 1e-8;
     for (int i = n; i < n + m; ++i) all.emplace_back(i, i, -eps);
@@ -36,7 +54,7 @@ void TimeStepper::iterationTriplets(Dynamics& system, const IntegratorState& at,
 
 SparseMatrix TimeStepper::iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC,
                                           double cK, bool regularize) {
-  const int size = system.velocityCount() + system.constraintCount();
+  const int size = newtonSize(system, cM);
   Triplets all, jacobian;
   iterationTriplets(system, at, cM, cC, cK, regularize, all, jacobian);
   SparseMatrix S(size, size);
@@ -48,17 +66,17 @@ SparseMatrix TimeStepper::iterationMatrix(Dynamics& system, const IntegratorStat
 bool TimeStepper::assembleIterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC,
                                           double cK) {
   iterationTriplets(system, at, cM, cC, cK, true, iterationTriplets_, jacobianTriplets_);
-  return iteration_.assign(system.velocityCount() + system.constraintCount(), iterationTriplets_);
+  return iteration_.assign(newtonSize(system, cM), iterationTriplets_);
 }
 
 bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const VectorXd& violation) {
   const int n = system.velocityCount(), m = system.constraintCount();
   LinearSolver solver;
   const SparseMatrix A = iterationMatrix(system, state, 1.0, 0.0, 0.0);
-  solver.analyzePattern(A);
+  solver.analyzePattern(A, pivotOrder(system, 1.0));
   if (solver.factorize(A) != LinearSolver::Status::Ok) return false;
-  VectorXd rhs = VectorXd::Zero(n + m);
-  rhs.tail(m) = -violation;
+  VectorXd rhs = VectorXd::Zero(A.rows());
+  rhs.segment(n, m) = -violation;
   VectorXd x = solver.solve(rhs);
   // Refinement against the unregularised matrix meets the constraints exactly.
   const SparseMatrix exact = iterationMatrix(system, state, 1.0, 0.0, 0.0, false);

@@ -60,13 +60,18 @@ class TimeStepper {
   virtual void beginAdvance() {}
 
   // The Newton matrix [S Phi_q^T; Phi_q -eps I] from the system's tangent
-  // (eps = 0 with regularize false).
+  // (eps = 0 with regularize false), auxiliary unknowns last.
   static SparseMatrix iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
                                       bool regularize = true);
   // The same (regularised) matrix into assembledIterationMatrix(), reusing
   // the pattern and the triplet storage of the previous call; true when the
   // pattern is new and needs a symbolic analysis.
   bool assembleIterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK);
+  // Rows of the Newton matrix with mass factor cM: velocities, multipliers
+  // (from velocityCount() on) and the system's auxiliary unknowns.
+  static int newtonSize(const Dynamics& system, double cM);
+  // The system's pivot order (Dynamics::pivotOrder) in the matrix's indices.
+  static std::vector<std::pair<int, int>> pivotOrder(const Dynamics& system, double cM);
   const SparseMatrix& assembledIterationMatrix() const { return iteration_.matrix(); }
 
   SolverOptions options_;

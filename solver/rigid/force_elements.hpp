@@ -12,6 +12,14 @@
 
 namespace mfbd {
 
+// The wrenches [force; torque] of one element on its two markers' bodies
+// (world, about each centre of mass; zero on ground, and on body 2 of an
+// applied force), after forwardKinematics.
+struct ForceElementWrenches {
+  Vec6 onBody1 = Vec6::Zero(), onBody2 = Vec6::Zero();
+};
+ForceElementWrenches forceElementWrenches(const ForceElement& e, const VectorXd& inputs, const Data& data);
+
 // Adds every element's wrenches to data.appliedForce / appliedTorque (after
 // forwardKinematics); `inputs` holds the force-element inputs.
 void applyForceElements(const std::vector<ForceElement>& elements, const VectorXd& inputs, Data& data);

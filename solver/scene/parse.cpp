@@ -178,7 +178,8 @@ JointSpec parseJoint(const Field& f) {
 }
 
 SolverOptions parseSolver(const Field& f) {
-  f.expectObject({"h_max", "h_min", "rho_inf", "tolerance", "max_iterations", "initial_equilibrium"}, {});
+  f.expectObject({"h_max", "h_min", "rho_inf", "tolerance", "max_iterations", "initial_equilibrium", "newton_matrix"},
+                 {});
   SolverOptions s;
   if (f.has("h_max")) s.hMax = f.at("h_max").positive();
   if (f.has("h_min")) s.hMin = f.at("h_min").positive();
@@ -193,6 +194,13 @@ SolverOptions parseSolver(const Field& f) {
     if (s.maxIterations < 1 || s.maxIterations > 100) f.at("max_iterations").fail("expected 1 to 100");
   }
   if (f.has("initial_equilibrium")) s.initialEquilibrium = f.at("initial_equilibrium").boolean();
+  if (f.has("newton_matrix")) {
+    const std::string form = f.at("newton_matrix").string();
+    if (form == "automatic") s.newtonMatrix = SolverOptions::NewtonMatrix::Automatic;
+    else if (form == "joint_space") s.newtonMatrix = SolverOptions::NewtonMatrix::JointSpace;
+    else if (form == "recursive") s.newtonMatrix = SolverOptions::NewtonMatrix::Recursive;
+    else f.at("newton_matrix").fail("expected \"automatic\", \"joint_space\" or \"recursive\"");
+  }
   return s;
 }
 

@@ -180,6 +180,14 @@ struct SolverOptions {
   // Dynamics starts from the static equilibrium under gravity and loads at
   // the start time (solved at fmi2ExitInitializationMode), at rest.
   bool initialEquilibrium = false;
+  // Form of the Newton matrix of the rigid tree in dynamics: joint space
+  // (B^T M B and exact finite-difference derivatives; dense for a chain), or
+  // recursive (body-level unknowns, sparse, O(n); see System::recursiveTangent).
+  // Automatic: recursive for a tree without cut joints whose joint-space
+  // tangent would hold a dense block of kRecursiveNewtonMatrixRates rates.
+  enum class NewtonMatrix { Automatic, JointSpace, Recursive };
+  NewtonMatrix newtonMatrix = NewtonMatrix::Automatic;
+  static constexpr int kRecursiveNewtonMatrixRates = 50;
 };
 
 // Which outputs the FMU exposes. Empty lists with `all` false expose none.
