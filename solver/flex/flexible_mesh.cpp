@@ -30,9 +30,20 @@ void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const 
       s.acceleration.omegaDot = vdot.segment<3>(n.dof[3]);
     } else if (n.drive >= 0) {
       const FlexDrive& d = mesh.drives[n.drive];
-      const double angle = drives.angle(mesh, inputs, n.drive, t);
-      const double rate = d.inputOffset >= 0 ? inputs[d.inputOffset] : d.angle.rate(t);
-      const double acceleration = d.inputOffset >= 0 ? 0.0 : d.angle.acceleration(t);
+      double angle, rate, acceleration;
+      if (d.inputOffset >= 0) {
+        angle = drives.angle(mesh, inputs, n.drive, t);
+        rate = inputs[d.inputOffset];
+        acceleration = 0.0;
+      } else {
+        if (drives.samples.size() != mesh.drives.size()) drives.samples.resize(mesh.drives.size());
+        DriveState::Sample& sample = drives.samples[n.drive];
+        if (!(sample.t == t && sample.stepStart == drives.stepStart))
+          sample = {t, drives.stepStart, d.angle(t), d.angle.rate(t), d.angle.acceleration(t)};
+        angle = sample.angle;
+        rate = sample.rate;
+        acceleration = sample.acceleration;
+      }
       s.pose.A = expSO3(d.axis * angle) * n.reference.A;
       // The axis is fixed in the world: omega_node = A^T axis rate, and its
       // derivative A^T axis rate_dot (the omega x omega term vanishes).
