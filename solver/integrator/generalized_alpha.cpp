@@ -144,6 +144,9 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
 
   VectorXd r, phi, rhs;
   double previous = 0.0;
+  // Corrections computed with the current factorization, if it was made in
+  // this substep (-1: an earlier substep's matrix).
+  int withFreshMatrix = -1;
   // Corrections cannot resolve below a few ulps of the coordinates, nor
   // below the noise the constraints' round-off makes (constraintNoise).
   const double coordinateFloor =
@@ -164,6 +167,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
         return false;
       }
       ++s.factorizations;
+      withFreshMatrix = 0;
     }
     // The constraints are met to the tolerance or to their round-off.
     const double phiFloor = 64.0 * std::numeric_limits<double>::epsilon() * system.constraintLengthScale();
@@ -172,6 +176,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     rhs.segment(n, m) = -phi;
     const VectorXd delta = solver_.solve(rhs);
     ++s.newtonIterations;
+    if (withFreshMatrix >= 0) ++withFreshMatrix;
     const double size = delta.head(n).cwiseAbs().maxCoeff();
     if (!std::isfinite(size)) {
       why = "Newton correction is not finite";
@@ -208,12 +213,21 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
       return true;
     }
     // Modified Newton: a stale iteration matrix is refreshed when the
-    // contraction slows; a fresh one that does not contract has failed.
-    // Corrections within ten times the round-off floor stay with the current
-    // matrix: there a refresh (tangent and factorization, several iterations'
-    // worth) would save an iteration at most, and their rate is half noise.
-    if (k > 0 && size > 0.25 * previous && size > 10.0 * floor) {
-      if (fresh && size > previous) {
+    // contraction slows, or when at its rate the tolerance would not be
+    // reached in the iterations left (a rate of 0.2 from 1e-3 to 1e-14
+    // needs 16: a long communication step's matrix, kept over ten substeps
+    // of a double pendulum, failed whole substeps that way); a fresh one
+    // that does not contract has failed. Corrections within ten times the
+    // round-off floor stay with the current matrix: there a refresh
+    // (tangent and factorization, several iterations' worth) would save an
+    // iteration at most, and their rate is half noise.
+    const int left = options_.maxIterations - 1 - k;
+    const bool tooSlow = rho < 1.0 && std::pow(rho, left) / (1.0 - rho) * size > options_.tolerance;
+    if (k > 0 && (size > 0.25 * previous || tooSlow) && size > 10.0 * floor) {
+      // Diverging: two corrections of this substep's own matrix, growing
+      // (a correction right after a refresh is not compared with the stale
+      // matrix's last one).
+      if (withFreshMatrix >= 2 && size > previous) {
         std::ostringstream msg;
         msg << "Newton diverging (correction " << size << " after " << previous << ")";
         why = msg.str();

@@ -8,6 +8,8 @@
 
 #include "integrator/constraint_rank.hpp"
 #include "integrator/generalized_alpha.hpp"
+#include "scene/scene.hpp"
+#include "simulation.hpp"
 
 using namespace mfbd;
 
@@ -115,4 +117,30 @@ TEST(ConstraintRank, FindsVanishingAndDependentRows) {
   EXPECT_TRUE(constraintRank(J).dependentRows.empty());
   J(3, 2) = 5e-12;
   EXPECT_EQ(constraintRank(J).rank, 2);
+}
+
+TEST(GeneralizedAlpha, LongCommunicationStepsNeitherRejectNorChangeTheAnswer) {
+  // R2 double pendulum (two 1 m, 1 kg bars from horizontal), h = 1e-2,
+  // rho_inf = 1: with doStep 0.1 s the matrix of a communication point is
+  // kept over ten substeps. Modified Newton must refresh it in time to meet
+  // the tolerance rather than fail whole substeps (it rejected 75 of 1075
+  // in 10 s before), and land on the motion of doStep 0.01 s (fresh matrix
+  // every substep) to the Newton tolerance's accumulation over 3 s.
+  const char* scene = R"({"format": "mfbd-scene/1", "name": "r2", "gravity": [0, -9.81, 0],
+    "solver": {"h_max": 0.01, "rho_inf": 1.0},
+    "bodies": [{"name": "bar1", "mass": 1, "inertia": [0, 0.0833333333333333, 0.0833333333333333], "position": [0.5, 0, 0]},
+               {"name": "bar2", "mass": 1, "inertia": [0, 0.0833333333333333, 0.0833333333333333], "position": [1.5, 0, 0]}],
+    "joints": [{"name": "shoulder", "type": "revolute", "parent": "ground", "child": "bar1", "position": [0, 0, 0]},
+               {"name": "elbow", "type": "revolute", "parent": "bar1", "child": "bar2", "position": [1, 0, 0]}]})";
+  Simulation longSteps(parseScene(scene)), shortSteps(parseScene(scene));
+  std::string message;
+  ASSERT_TRUE(longSteps.initialize(0.0, message));
+  ASSERT_TRUE(shortSteps.initialize(0.0, message));
+  for (int k = 0; k < 30; ++k) {
+    ASSERT_TRUE(longSteps.doStep(0.1).ok);
+    for (int i = 0; i < 10; ++i) ASSERT_TRUE(shortSteps.doStep(0.01).ok);
+  }
+  EXPECT_EQ(longSteps.state().rejectedSubsteps, 0);
+  EXPECT_EQ(longSteps.state().substeps, 300);
+  EXPECT_LT((longSteps.state().q.scalars - shortSteps.state().q.scalars).cwiseAbs().maxCoeff(), 1e-9);
 }

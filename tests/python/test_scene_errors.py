@@ -139,6 +139,8 @@ CASES = [
      ["joints[0].position: expected 3 numbers, got 2"]),
     ("spectral radius out of range", edit(set_in(["solver", "rho_inf"], 2)),
      ["solver.rho_inf: expected a spectral radius in [0, 1]"]),
+    ("unknown Newton matrix form", edit(set_in(["solver", "newton_matrix"], "dense")),
+     ['solver.newton_matrix: expected "automatic", "joint_space" or "recursive"']),
     ("body without a joint", edit(lambda s: s["bodies"].append(
         {"name": "loose", "mass": 1, "inertia": [1, 1, 1], "position": [0, 0, 0]})),
      ["bodies[1]: body 'loose' has no joint to a parent", "\"free\" joint"]),
