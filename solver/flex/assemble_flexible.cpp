@@ -42,6 +42,8 @@ void layOutNode(FlexNode& n, const SupportSpec* support, std::vector<CoordinateB
   }
   v0.conservativeResize(velocityCount);
   v0.tail(velocityCount - firstVelocity).setZero();
+  n.free = n.P == Mat6::Identity();
+  for (int c = 0; c < 6; ++c) n.free = n.free && n.dof[c] == n.dof[0] + c;
 }
 
 }  // namespace

@@ -147,8 +147,8 @@ Kinematics corotatedFrame(const CorotationalBeam& beam, const NodePose& n1,
   Kinematics k;
   k.A[0] = n1.A;
   k.A[1] = n2.A;
-  k.R[0] = n1.A * beam.C1;
-  k.R[1] = n2.A * beam.C2;
+  k.R[0] = beam.identityC1 ? n1.A : Mat3(n1.A * beam.C1);
+  k.R[1] = beam.identityC2 ? n2.A : Mat3(n2.A * beam.C2);
   const Vec3 x = n2.r - n1.r;
   k.l = x.norm();
   if (!(k.l > 1e-9 * beam.L0)) return k;
@@ -201,8 +201,10 @@ Vec7 strainIncrement(const CorotationalBeam& beam, const Kinematics& k, const Ve
   const Vec3 spin = frameSpin(k, dq);
   Vec7 de;
   de[0] = k.e1.dot(dq.segment<3>(6) - dq.segment<3>(0));
-  de.segment<3>(1) = k.Tinv[0] * (beam.C1.transpose() * dq.segment<3>(3) - k.R[0].transpose() * spin);
-  de.segment<3>(4) = k.Tinv[1] * (beam.C2.transpose() * dq.segment<3>(9) - k.R[1].transpose() * spin);
+  const Vec3 nodeSpin1 = beam.identityC1 ? Vec3(dq.segment<3>(3)) : Vec3(beam.C1.transpose() * dq.segment<3>(3));
+  const Vec3 nodeSpin2 = beam.identityC2 ? Vec3(dq.segment<3>(9)) : Vec3(beam.C2.transpose() * dq.segment<3>(9));
+  de.segment<3>(1) = k.Tinv[0] * (nodeSpin1 - k.R[0].transpose() * spin);
+  de.segment<3>(4) = k.Tinv[1] * (nodeSpin2 - k.R[1].transpose() * spin);
   return de;
 }
 
@@ -213,9 +215,9 @@ Vec12 strainMapTranspose(const CorotationalBeam& beam, const Kinematics& k, cons
   const Vec3 m2 = k.Tinv[1].transpose() * fl.segment<3>(4);
   Vec12 f = frameSpinTranspose(k, -(k.R[0] * m1 + k.R[1] * m2));
   f.segment<3>(0) -= fl[0] * k.e1;
-  f.segment<3>(3) += beam.C1 * m1;
+  f.segment<3>(3) += beam.identityC1 ? m1 : Vec3(beam.C1 * m1);
   f.segment<3>(6) += fl[0] * k.e1;
-  f.segment<3>(9) += beam.C2 * m2;
+  f.segment<3>(9) += beam.identityC2 ? m2 : Vec3(beam.C2 * m2);
   return f;
 }
 
@@ -230,8 +232,13 @@ void tangentMaps(const CorotationalBeam& beam, Kinematics& k) {
   k.B.block<1, 3>(0, 0) = -k.e1.transpose();
   k.B.block<1, 3>(0, 6) = k.e1.transpose();
   for (int i = 0; i < 2; ++i) {
+    // -R_i^T P from P = [-Pr, e1 twist_1^T, Pr, e1 twist_2^T] block by block
+    const Mat3 RtPr = k.R[i].transpose() * k.Pr;
+    const Vec3 Rte1 = k.R[i].transpose() * k.e1;
+    k.X[i].block<3, 3>(0, 0) = RtPr;
+    k.X[i].block<3, 3>(0, 6) = -RtPr;
+    for (int j = 0; j < 2; ++j) k.X[i].block<3, 3>(0, 3 + 6 * j) = -Rte1 * k.twist[j].transpose();
     // R_i^T dw_i = C_i^T A_i^T A_i dtheta_i = C_i^T dtheta_i
-    k.X[i] = -k.R[i].transpose() * k.P;
     k.X[i].block<3, 3>(0, 3 + 6 * i) += C[i].transpose();
     k.B.middleRows<3>(1 + 3 * i) = k.Tinv[i] * k.X[i];
   }
@@ -251,9 +258,17 @@ struct FrameDerivatives {
 
 FrameDerivatives frameDerivatives(const Kinematics& k) {
   FrameDerivatives d;
-  d.dE1 = -skew(k.e1) * k.P;
-  d.dE2 = -skew(k.e2) * k.P;
-  d.dE3 = -skew(k.e3) * k.P;
+  // -skew(e_j) P = [skew(e_j) Pr, -(e_j x e1) twist_1^T, -skew(e_j) Pr, -(e_j x e1) twist_2^T],
+  // with e1 x e1 = 0, e2 x e1 = -e3, e3 x e1 = e2.
+  auto spinOf = [&k](Mat3x12& dE, const Vec3& e, const Vec3& eCrossE1) {
+    const Mat3 ePr = skew(e) * k.Pr;
+    dE.block<3, 3>(0, 0) = ePr;
+    dE.block<3, 3>(0, 6) = -ePr;
+    for (int i = 0; i < 2; ++i) dE.block<3, 3>(0, 3 + 6 * i) = -eCrossE1 * k.twist[i].transpose();
+  };
+  spinOf(d.dE1, k.e1, Vec3::Zero());
+  spinOf(d.dE2, k.e2, -k.e3);
+  spinOf(d.dE3, k.e3, k.e2);
   d.dl.setZero();
   d.dl.segment<3>(0) = -k.e1.transpose();
   d.dl.segment<3>(6) = k.e1.transpose();
@@ -330,13 +345,23 @@ void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, co
     sSum += s;
     dStrain[i] = k.B.middleRows<3>(1 + 3 * i);
     const Mat3x12 Y = inverseTangentVariation(k.theta[i], k.tangentCoefficients[i], flRotation, true) * dStrain[i];
-    G.middleRows<3>(3 + 6 * i) += C[i] * Y;
+    if (i == 0 ? beam.identityC1 : beam.identityC2)
+      G.middleRows<3>(3 + 6 * i) += Y;
+    else
+      G.middleRows<3>(3 + 6 * i) += C[i] * Y;
     spin -= k.R[i] * Y;
     spin.block<3, 3>(0, 3 + 6 * i) += skew(s) * k.A[i];
   }
   G.middleRows<3>(0) -= fl[0] * d.dE1;
   G.middleRows<3>(6) += fl[0] * d.dE1;
-  K += G + k.P.transpose().lazyProduct(spin) - frameSpinTransposeDerivative(k, d, sSum);
+  // P^T spin = [-Pr^T spin; twist_1 (e1^T spin); Pr^T spin; twist_2 (e1^T spin)]
+  const Mat3x12 PrTspin = k.Pr.transpose() * spin;
+  const Row12 e1spin = k.e1.transpose() * spin;
+  G.middleRows<3>(0) -= PrTspin;
+  G.middleRows<3>(6) += PrTspin;
+  G.middleRows<3>(3) += k.twist[0] * e1spin;
+  G.middleRows<3>(9) += k.twist[1] * e1spin;
+  K += G - frameSpinTransposeDerivative(k, d, sSum);
   if (dampingBeta == 0.0) return;
   // d(B v) = [(v2 - v1)^T de1; dT^-1_i X_i v + T^-1_i R_i^T (dw_i x P v - dP v)]
   const Vec3 spinRate = frameSpin(k, v);
@@ -351,6 +376,19 @@ void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, co
         k.Tinv[i] * (k.R[i].transpose() * dRelativeSpin);
   }
   K += dampingBeta * BtKl.lazyProduct(dStrainRate);
+}
+
+// K_l B using the pattern of localTimoshenkoStiffness: axial (0), torsion
+// (1, 4), bending (2, 5) and (3, 6) couple only within their pairs.
+Mat7x12 localStiffnessTimes(const Mat7& Kl, const Mat7x12& B) {
+  Mat7x12 out;
+  out.row(0) = Kl(0, 0) * B.row(0);
+  for (int a = 1; a <= 3; ++a) {
+    const int b = a + 3;
+    out.row(a) = Kl(a, a) * B.row(a) + Kl(a, b) * B.row(b);
+    out.row(b) = Kl(b, a) * B.row(a) + Kl(b, b) * B.row(b);
+  }
+  return out;
 }
 
 Vec7 localDeformationVector(const Kinematics& k) {
@@ -380,6 +418,8 @@ CorotationalBeam CorotationalBeam::fromReference(const NodePose& n1, const NodeP
   E0 << e1, y.normalized(), e1.cross(y.normalized());
   beam.C1 = n1.A.transpose() * E0;
   beam.C2 = n2.A.transpose() * E0;
+  beam.identityC1 = beam.C1 == Mat3::Identity();
+  beam.identityC2 = beam.C2 == Mat3::Identity();
   beam.section = section;
   beam.localStiffness = localTimoshenkoStiffness(section, beam.L0);
   return beam;
@@ -417,12 +457,107 @@ Vec12 nodeVelocities(const NodeVelocity& v1, const NodeVelocity& v2) {
 
 }  // namespace
 
+namespace {
+
+// Rotation vector of the small local rotation Rr^T R (the element's
+// deformation), from the trace and the skew part alone: the series of
+// math/rotation.cpp's logSO3 below 0.2 rad, without forming the product.
+Vec3 localRotation(const Vec3& e1, const Vec3& e2, const Vec3& e3, const Mat3& R) {
+  const Vec3 c0 = R.col(0), c1 = R.col(1), c2 = R.col(2);
+  const double cosT = (e1.dot(c0) + e2.dot(c1) + e3.dot(c2) - 1.0) * 0.5;
+  const Vec3 w(0.5 * (e3.dot(c1) - e2.dot(c2)), 0.5 * (e1.dot(c2) - e3.dot(c0)), 0.5 * (e2.dot(c0) - e1.dot(c1)));
+  const double s2 = w.squaredNorm();
+  if (!(cosT > 0.0 && s2 < 0.04)) {
+    Mat3 Rr;
+    Rr << e1, e2, e3;
+    return logSO3(Rr.transpose() * R);
+  }
+  static constexpr double c[11] = {1.0, 1.0 / 6.0, 3.0 / 40.0, 5.0 / 112.0, 35.0 / 1152.0, 63.0 / 2816.0,
+                                   231.0 / 13312.0, 143.0 / 10240.0, 6435.0 / 557056.0, 12155.0 / 1245184.0,
+                                   46189.0 / 5505024.0};
+  // Below 1e-3 rad three terms reach 1e-19 (the usual case); above, the
+  // series in two halves (Estrin) for a shorter dependency chain.
+  if (s2 < 1e-6) return w * (c[0] + s2 * (c[1] + s2 * c[2]));
+  const double s4 = s2 * s2, s10 = s4 * s4 * s2;
+  const double low = (c[0] + s2 * c[1]) + s4 * ((c[2] + s2 * c[3]) + s4 * c[4]);
+  const double high = (c[5] + s2 * c[6]) + s4 * ((c[7] + s2 * c[8]) + s4 * (c[9] + s2 * c[10]));
+  return w * (low + s10 * high);
+}
+
+// e(t) of T^-1 (inverseTangentCoefficients) alone.
+double inverseTangentE(const Vec3& theta) {
+  const double t2 = theta.squaredNorm();
+  if (t2 < 1e-4) return 1.0 / 12.0 + t2 * (1.0 / 720.0 + t2 * (1.0 / 30240.0));  // next term < 1e-17 relative
+  return inverseTangentCoefficients(theta).e;
+}
+
+// T^-1 y and T^-T y without forming T^-1 = e theta theta^T + S/2 + (1 - e t^2) I.
+Vec3 inverseTangentTimes(const Vec3& theta, double e, const Vec3& y, bool transposed) {
+  const Vec3 half = 0.5 * theta.cross(y);
+  return (1.0 - e * theta.squaredNorm()) * y + (e * theta.dot(y)) * theta + (transposed ? -half : half);
+}
+
+}  // namespace
+
+// The same f as internalForces (corotatedFrame, localForce,
+// strainMapTranspose), written for the residual's element loop: no
+// Kinematics workspace, no tangent-operator matrices, products with the
+// frame taken as dot products, the local rotations by localRotation.
 bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
                          const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta, Vec12& f) {
-  const Kinematics k = corotatedFrame(beam, n1, n2);
-  if (!k.valid) return false;
-  f = strainMapTranspose(beam, k, localForce(beam, k, nodeVelocities(v1, v2), dampingBeta));
-  return f.allFinite();
+  const Mat3 R0 = beam.identityC1 ? n1.A : Mat3(n1.A * beam.C1);
+  const Mat3 R1 = beam.identityC2 ? n2.A : Mat3(n2.A * beam.C2);
+  const Vec3 x = n2.r - n1.r;
+  const double l = x.norm();
+  if (!(l > 1e-9 * beam.L0)) return false;
+  const double inverseLength = 1.0 / l;
+  const Vec3 e1 = x * inverseLength;
+  const Vec3 q0 = R0.col(1), q1 = R1.col(1);
+  const Vec3 qMean = 0.5 * (q0 + q1);
+  const Vec3 n = e1.cross(qMean);
+  const double qy = n.norm();
+  if (!(qy > 1e-6)) return false;
+  const Vec3 e3 = n / qy;
+  const Vec3 e2 = e3.cross(e1);
+  const double eta = qMean.dot(e1) / qy;
+  const Vec3 theta0 = localRotation(e1, e2, e3, R0), theta1 = localRotation(e1, e2, e3, R1);
+  const double tangent0 = inverseTangentE(theta0), tangent1 = inverseTangentE(theta1);
+  const double u = (x.squaredNorm() - beam.L0 * beam.L0) / (l + beam.L0);
+  // twist_i = A_i^T (q_i x e3) / (2 qy): e1.dw_r of node i's spin
+  const Vec3 twist0 = n1.A.transpose() * (q0.cross(e3) / (2.0 * qy));
+  const Vec3 twist1 = n2.A.transpose() * (q1.cross(e3) / (2.0 * qy));
+  // Pr d and Pr^T w (chordSpinTimes, chordSpinTransposeTimes)
+  auto chordSpin = [&](const Vec3& d) { return (e3 * e2.dot(d) - (eta * e1 + e2) * e3.dot(d)) * inverseLength; };
+  auto chordSpinTranspose = [&](const Vec3& w) {
+    return (e2 * e3.dot(w) - e3 * (eta * e1.dot(w) + e2.dot(w))) * inverseLength;
+  };
+  Vec7 el;
+  el << u, theta0, theta1;
+  const Mat7& Kl = beam.localStiffness;
+  Vec7 fl = Kl * el;
+  if (dampingBeta != 0.0) {
+    // edot_l = B v (strainIncrement)
+    const Vec3 spin = chordSpin(v2.v - v1.v) + e1 * (twist0.dot(v1.omega) + twist1.dot(v2.omega));
+    const Vec3 w0 = beam.identityC1 ? v1.omega : Vec3(beam.C1.transpose() * v1.omega);
+    const Vec3 w1 = beam.identityC2 ? v2.omega : Vec3(beam.C2.transpose() * v2.omega);
+    Vec7 rate;
+    rate[0] = e1.dot(v2.v - v1.v);
+    rate.segment<3>(1) = inverseTangentTimes(theta0, tangent0, w0 - R0.transpose() * spin, false);
+    rate.segment<3>(4) = inverseTangentTimes(theta1, tangent1, w1 - R1.transpose() * spin, false);
+    fl += dampingBeta * (Kl * rate);
+  }
+  // f = B^T f_l (strainMapTranspose)
+  const Vec3 m0 = inverseTangentTimes(theta0, tangent0, fl.segment<3>(1), true);
+  const Vec3 m1 = inverseTangentTimes(theta1, tangent1, fl.segment<3>(4), true);
+  const Vec3 w = -(R0 * m0 + R1 * m1);
+  const Vec3 chord = chordSpinTranspose(w);
+  const double axial = e1.dot(w);
+  f.segment<3>(0) = -chord - fl[0] * e1;
+  f.segment<3>(3) = axial * twist0 + (beam.identityC1 ? m0 : Vec3(beam.C1 * m0));
+  f.segment<3>(6) = chord + fl[0] * e1;
+  f.segment<3>(9) = axial * twist1 + (beam.identityC2 ? m1 : Vec3(beam.C2 * m1));
+  // A NaN or infinity anywhere (u, theta, the frame) reaches f; so does its sum.
+  return std::isfinite(f.sum());
 }
 
 BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
@@ -440,7 +575,7 @@ BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
   }
   tangentMaps(beam, k);
   // Small products: coefficient-wise (lazyProduct), not Eigen's blocked GEMM.
-  const Eigen::Matrix<double, 12, 7> BtKl = k.B.transpose().lazyProduct(beam.localStiffness);
+  const Eigen::Matrix<double, 12, 7> BtKl = localStiffnessTimes(beam.localStiffness, k.B).transpose();
   out.K = BtKl.lazyProduct(k.B);
   out.C = dampingBeta * out.K;
   addGeometricStiffness(beam, k, fl, v, dampingBeta, BtKl, out.K);

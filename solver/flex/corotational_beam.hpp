@@ -40,6 +40,10 @@ struct CorotationalBeam {
   // node i's copy of the element frame in any configuration.
   Mat3 C1 = Mat3::Identity();
   Mat3 C2 = Mat3::Identity();
+  // C1, C2 exactly the identity (nodes oriented like the element, as a beam
+  // line makes them): products with them are skipped, which gives the same
+  // numbers.
+  bool identityC1 = true, identityC2 = true;
   BeamSection section;
   Mat7 localStiffness = Mat7::Zero();  // on [u; theta1; theta2]
 };

@@ -30,9 +30,20 @@ void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const 
       s.acceleration.omegaDot = vdot.segment<3>(n.dof[3]);
     } else if (n.drive >= 0) {
       const FlexDrive& d = mesh.drives[n.drive];
-      const double angle = drives.angle(mesh, inputs, n.drive, t);
-      const double rate = d.inputOffset >= 0 ? inputs[d.inputOffset] : d.angle.rate(t);
-      const double acceleration = d.inputOffset >= 0 ? 0.0 : d.angle.acceleration(t);
+      double angle, rate, acceleration;
+      if (d.inputOffset >= 0) {
+        angle = drives.angle(mesh, inputs, n.drive, t);
+        rate = inputs[d.inputOffset];
+        acceleration = 0.0;
+      } else {
+        if (drives.samples.size() != mesh.drives.size()) drives.samples.resize(mesh.drives.size());
+        DriveState::Sample& sample = drives.samples[n.drive];
+        if (!(sample.t == t && sample.stepStart == drives.stepStart))
+          sample = {t, drives.stepStart, d.angle(t), d.angle.rate(t), d.angle.acceleration(t)};
+        angle = sample.angle;
+        rate = sample.rate;
+        acceleration = sample.acceleration;
+      }
       s.pose.A = expSO3(d.axis * angle) * n.reference.A;
       // The axis is fixed in the world: omega_node = A^T axis rate, and its
       // derivative A^T axis rate_dot (the omega x omega term vanishes).
@@ -70,20 +81,25 @@ Vec6 loadVector(const FlexLoad& l, const NodeState& s, const VectorXd& inputs, d
 
 // Adds P^T g to r for a 6-vector g acting on node n.
 void scatter(const FlexNode& n, const Vec6& g, VectorXd& r) {
+  if (n.free) {
+    r.segment<6>(n.dof[0]) += g;
+    return;
+  }
   for (int c = 0; c < 6; ++c)
     if (n.dof[c] >= 0) r[n.dof[c]] += n.P.col(c).dot(g);
 }
 
-// P = I: a free node (most of a mesh), whose blocks need no projection.
-bool isFree(const FlexNode& n) {
-  for (int c = 0; c < 6; ++c)
-    if (n.dof[c] < 0) return false;
-  return n.P == Mat6::Identity();
-}
+bool isFree(const FlexNode& n) { return n.free; }
 
 // Adds P_a^T B P_b to the triplets for a 6 x 6 block B coupling nodes a, b
 // (B itself when both are free: P^T B P would give B exactly anyway).
 void scatter(const FlexNode& a, const FlexNode& b, bool bothFree, const Mat6& B, Triplets& out) {
+  if (bothFree) {  // consecutive dof: the block as it is, column by column as below
+    const int i0 = a.dof[0], j0 = b.dof[0];
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) out.emplace_back(i0 + i, j0 + j, B(i, j));
+    return;
+  }
   const Mat6 projected = bothFree ? B : Mat6(a.P.transpose() * B * b.P);
   for (int i = 0; i < 6; ++i) {
     if (a.dof[i] < 0) continue;

@@ -10,6 +10,7 @@
 // columns for fixed directions; element and inertia blocks are projected
 // with it (P^T K P), so supports never appear as equations.
 #pragma once
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,9 @@ struct FlexNode {
   int drive = -1;         // prescribed rotation: index into FlexibleMesh::drives, -1 = clamped
   std::array<int, 6> dof{{-1, -1, -1, -1, -1, -1}};  // velocity index of each column of P, -1 if fixed
   Mat6 P = Mat6::Zero();
+  // P = I with consecutive dof (most of a mesh): its blocks and vectors go
+  // in unprojected (P^T B P and P^T g would give them exactly anyway).
+  bool free = false;
   NodalInertia inertia;
 };
 
@@ -87,6 +91,16 @@ struct DriveState {
   std::vector<double> startAngle;  // rate-input drives: angle at the step start
   double stepStart = 0.0;
   double angle(const FlexibleMesh& mesh, const VectorXd& inputs, int drive, double t) const;
+  // Angle, rate and acceleration of a time-function drive, kept for the
+  // last time asked (the Newton iterations of a substep all ask at its end
+  // time; rate and acceleration are finite differences, five evaluations
+  // of the expression). Keyed by the time and the step start, so a new
+  // step (endStep, startDrives) evaluates afresh.
+  struct Sample {
+    double t = std::numeric_limits<double>::quiet_NaN(), stepStart = 0.0;
+    double angle = 0.0, rate = 0.0, acceleration = 0.0;
+  };
+  mutable std::vector<Sample> samples;
 };
 
 void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const VectorXd& v, const VectorXd& vdot,

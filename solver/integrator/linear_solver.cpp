@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include <Eigen/Dense>
-#include <Eigen/KLUSupport>
+#include <klu.h>
 
 namespace mfbd {
 
@@ -43,6 +43,61 @@ int32_t keepOrder(int32_t n, int32_t*, int32_t*, int32_t* permutation, klu_commo
 }
 }  // namespace
 
+// KLU through its C interface rather than Eigen's wrapper, for klu_refactor:
+// a matrix of the analysed pattern is refactorised with the pivot order of
+// the last full factorization (no pivot search, no depth-first search per
+// column), about twice as fast; a full factorization is taken again when
+// the pivots have degraded (reciprocal pivot ratio below 1e-3 of the full
+// factorization's) or the refactorization fails.
+struct KluFactors {
+  klu_common common;
+  klu_symbolic* symbolic = nullptr;
+  klu_numeric* numeric = nullptr;
+  double fullPivotRatio = 0.0;  // klu_rcond of the last full factorization
+  KluFactors() { klu_defaults(&common); }
+  ~KluFactors() { release(); }
+  KluFactors(const KluFactors&) = delete;
+  KluFactors& operator=(const KluFactors&) = delete;
+  void release() {
+    if (numeric) klu_free_numeric(&numeric, &common);
+    if (symbolic) klu_free_symbolic(&symbolic, &common);
+  }
+  // ordered: eliminate in the columns' given order (pre-permuted), one block.
+  bool analyze(const SparseMatrix& A, bool ordered) {
+    release();
+    klu_defaults(&common);
+    if (ordered) {
+      common.ordering = 3;  // the user's: keepOrder
+      common.user_order = keepOrder;
+      common.btf = 0;  // one block, in the given order
+    }
+    symbolic = klu_analyze(int(A.rows()), const_cast<int*>(A.outerIndexPtr()), const_cast<int*>(A.innerIndexPtr()),
+                           &common);
+    return symbolic != nullptr;
+  }
+  bool factorize(const SparseMatrix& A) {
+    if (!symbolic) return false;
+    int* p = const_cast<int*>(A.outerIndexPtr());
+    int* i = const_cast<int*>(A.innerIndexPtr());
+    double* x = const_cast<double*>(A.valuePtr());
+    if (numeric) {
+      if (klu_refactor(p, i, x, symbolic, numeric, &common) && klu_rcond(symbolic, numeric, &common) &&
+          common.rcond >= 1e-3 * fullPivotRatio)
+        return true;
+      klu_free_numeric(&numeric, &common);
+    }
+    numeric = klu_factor(p, i, x, symbolic, &common);
+    if (!numeric || !klu_rcond(symbolic, numeric, &common)) return false;
+    fullPivotRatio = common.rcond;
+    return common.status == KLU_OK;
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) {
+    Eigen::VectorXd x = b;
+    klu_solve(symbolic, numeric, int(x.size()), 1, x.data(), &common);
+    return x;
+  }
+};
+
 struct LinearSolver::Impl {
   using Permutation = Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int>;
   bool sparse = false;
@@ -55,7 +110,7 @@ struct LinearSolver::Impl {
   Eigen::PartialPivLU<Eigen::MatrixXd> dense;
   // KLU holds raw SuiteSparse handles and cannot be copied; a copy of the
   // solver (state saving) re-analyses lazily.
-  std::unique_ptr<Eigen::KLU<SparseMatrix>> klu;
+  std::unique_ptr<KluFactors> klu;
   bool analyzed = false;
 };
 
@@ -83,7 +138,7 @@ void LinearSolver::analyzePattern(const SparseMatrix& A, const std::vector<std::
   impl_->sparse = impl_->ordered ||
                   (A.rows() > kDenseThreshold && !(A.rows() <= kDenseMaximum && A.nonZeros() > 0.2 * size * size));
   if (!impl_->sparse) return;
-  impl_->klu = std::make_unique<Eigen::KLU<SparseMatrix>>();
+  impl_->klu = std::make_unique<KluFactors>();
   if (impl_->ordered) {
     const int n = int(A.rows());
     std::vector<int> rowAt(n, -1), columnAt(n, -1);  // new position of each row / column
@@ -99,27 +154,21 @@ void LinearSolver::analyzePattern(const SparseMatrix& A, const std::vector<std::
     impl_->rows.indices() = Eigen::Map<Eigen::VectorXi>(rowAt.data(), n);
     impl_->columns.indices() = Eigen::Map<Eigen::VectorXi>(columnAt.data(), n);
     impl_->permuted = impl_->rows * A * impl_->columns.transpose();
-    klu_common& common = impl_->klu->kluCommon();
-    common.ordering = 3;  // the user's: keepOrder
-    common.user_order = keepOrder;
-    common.btf = 0;       // one block, in the given order
-    impl_->klu->analyzePattern(impl_->permuted);
+    impl_->analyzed = impl_->klu->analyze(impl_->permuted, true);
   } else {
-    impl_->klu->analyzePattern(A);
+    impl_->analyzed = impl_->klu->analyze(A, false);
   }
-  impl_->analyzed = true;
 }
 
 LinearSolver::Status LinearSolver::factorize(const SparseMatrix& A) {
   if (impl_->sparse) {
     if (!impl_->analyzed) analyzePattern(A, impl_->pivotOrder);
+    if (!impl_->analyzed) return Status::Singular;
     if (impl_->ordered) {
       impl_->permuted = impl_->rows * A * impl_->columns.transpose();
-      impl_->klu->factorize(impl_->permuted);
-    } else {
-      impl_->klu->factorize(A);
+      return impl_->klu->factorize(impl_->permuted) ? Status::Ok : Status::Singular;
     }
-    return impl_->klu->info() == Eigen::Success ? Status::Ok : Status::Singular;
+    return impl_->klu->factorize(A) ? Status::Ok : Status::Singular;
   }
   const Eigen::MatrixXd dense(A);
   impl_->dense.compute(dense);

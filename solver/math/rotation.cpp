@@ -29,9 +29,21 @@ struct ExpCoefficients {
 
 ExpCoefficients expCoefficients(double t) {
   const double t2 = t * t;
-  if (t < 1e-4) {
-    return {1.0 - t2 / 6.0 + t2 * t2 / 120.0, 0.5 - t2 / 24.0 + t2 * t2 / 720.0,
-            1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0};
+  if (t < 0.2) {
+    // Taylor series to t^10: the first omitted term is below 1e-18 relative
+    // for t < 0.2 (no sin/cos: the small increments of every retraction),
+    // and more accurate than the closed forms, which cancel as t -> 0.
+    static constexpr double a[6] = {1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0};
+    static constexpr double b[6] = {1.0 / 2.0, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0,
+                                    -1.0 / 479001600.0};
+    static constexpr double c[6] = {1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0,
+                                    -1.0 / 6227020800.0};
+    auto series = [t2](const double* k) {  // sum_n k_n t^2n, Horner
+      double sum = k[5];
+      for (int n = 4; n >= 0; --n) sum = sum * t2 + k[n];
+      return sum;
+    };
+    return {series(a), series(b), series(c)};
   }
   const double s = std::sin(t), c = std::cos(t);
   return {s / t, (1.0 - c) / t2, (t - s) / (t2 * t)};
@@ -39,15 +51,38 @@ ExpCoefficients expCoefficients(double t) {
 }  // namespace
 
 Mat3 expSO3(const Vec3& theta) {
-  const ExpCoefficients k = expCoefficients(theta.norm());
-  const Mat3 S = skew(theta);
-  return Mat3::Identity() + k.a * S + k.b * S * S;
+  const double t2 = theta.squaredNorm();
+  const ExpCoefficients k = expCoefficients(std::sqrt(t2));
+  // I + a S + b S^2 with S^2 = theta theta^T - t^2 I (no 3 x 3 product).
+  Mat3 E = (k.b * theta) * theta.transpose();
+  E.diagonal().array() += 1.0 - k.b * t2;
+  const Vec3 as = k.a * theta;
+  E(0, 1) -= as.z();
+  E(1, 0) += as.z();
+  E(0, 2) += as.y();
+  E(2, 0) -= as.y();
+  E(1, 2) -= as.x();
+  E(2, 1) += as.x();
+  return E;
 }
 
 Vec3 logSO3(const Mat3& R) {
   const double cosT = std::clamp((R.trace() - 1.0) * 0.5, -1.0, 1.0);
   const Vec3 w = unskew(R);  // = sin(t) * axis
-  const double sinT = w.norm();
+  const double s2 = w.squaredNorm();
+  if (cosT > 0.0 && s2 < 0.04) {
+    // t < ~0.2 (the local rotations of a beam element, the relative
+    // rotations of a Newton step): t / sin(t) = asin(s)/s = sum_n c_n s^2n,
+    // c_n = c_(n-1) (2n-1)^2 / (2n (2n+1)), to s^20 (first omitted term
+    // below 1e-17 relative), without atan2.
+    static constexpr double c[11] = {1.0, 1.0 / 6.0, 3.0 / 40.0, 5.0 / 112.0, 35.0 / 1152.0, 63.0 / 2816.0,
+                                     231.0 / 13312.0, 143.0 / 10240.0, 6435.0 / 557056.0, 12155.0 / 1245184.0,
+                                     46189.0 / 5505024.0};
+    double f = c[10];
+    for (int n = 9; n >= 0; --n) f = f * s2 + c[n];
+    return w * f;
+  }
+  const double sinT = std::sqrt(s2);
   const double t = std::atan2(sinT, cosT);
   if (t < 1e-4) return w * (1.0 + t * t / 6.0);  // t/sin(t) by series
   if (t < 3.0) return w * (t / sinT);
