@@ -115,8 +115,7 @@ Eigen::MatrixXd schurComplement(const Eigen::MatrixXd& A, int k) {
          A.topRightCorner(k, a) * A.bottomRightCorner(a, a).partialPivLu().solve(A.bottomLeftCorner(a, k));
 }
 
-IntegratorState stateOf(const System& s, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
-                        const VectorXd& lambda) {
+IntegratorState stateOf(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda) {
   IntegratorState st;
   st.t = 0.1;
   st.q = q;
@@ -184,9 +183,9 @@ TEST(RecursiveNewtonMatrix, MassBlockIsTheJointSpaceMassMatrix) {
     // Unregularised: the -eps I of the constraint block scales with each
     // form's own diagonal.
     const Eigen::MatrixXd J =
-        denseMatrix(Stepper::iterationMatrix(joint, stateOf(joint, q, v, vdot, lambda), 1, 0, 0, false));
+        denseMatrix(Stepper::iterationMatrix(joint, stateOf(q, v, vdot, lambda), 1, 0, 0, false));
     const Eigen::MatrixXd R =
-        denseMatrix(Stepper::iterationMatrix(recursive, stateOf(recursive, q, v, vdot, lambda), 1, 0, 0, false));
+        denseMatrix(Stepper::iterationMatrix(recursive, stateOf(q, v, vdot, lambda), 1, 0, 0, false));
     ASSERT_EQ(R.rows(), n + m + 18 * bodies);
     const Eigen::MatrixXd S = schurComplement(R, n + m);
     EXPECT_LT((S - J).cwiseAbs().maxCoeff(), 1e-10 * J.cwiseAbs().maxCoeff());
@@ -212,7 +211,7 @@ TEST(RecursiveNewtonMatrix, DampingBlockIsTheJointSpaceOneAtAnyState) {
     Configuration q = joint.model().initialConfiguration;
     joint.retract(q, dq);
     auto damping = [&](System& s) {
-      const IntegratorState st = stateOf(s, q, v, vdot, lambda);
+      const IntegratorState st = stateOf(q, v, vdot, lambda);
       const Eigen::MatrixXd MC = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, 1, 0, false)), n + m);
       const Eigen::MatrixXd M = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, 0, 0, false)), n + m);
       return Eigen::MatrixXd((MC - M).topLeftCorner(n, n));
@@ -258,15 +257,15 @@ TEST(RecursiveNewtonMatrix, DampingAndStiffnessMatchTheJointSpaceWhereBIsNotLoad
   joint.residual(0.0, q, zero, zero, VectorXd(), r, phi);
   ASSERT_LT(r.cwiseAbs().maxCoeff(), 1e-12);  // at rest indeed
   for (const auto& [cC, cK] : {std::pair{1.0, 0.0}, std::pair{0.0, 1.0}, std::pair{0.3, 0.05}}) {
-    const Eigen::MatrixXd J = denseMatrix(Stepper::iterationMatrix(joint, stateOf(joint, q, zero, zero, VectorXd()),
+    const Eigen::MatrixXd J = denseMatrix(Stepper::iterationMatrix(joint, stateOf(q, zero, zero, VectorXd()),
                                                                    1.0, cC, cK));
     const Eigen::MatrixXd S = schurComplement(
-        denseMatrix(Stepper::iterationMatrix(recursive, stateOf(recursive, q, zero, zero, VectorXd()), 1.0, cC, cK)),
+        denseMatrix(Stepper::iterationMatrix(recursive, stateOf(q, zero, zero, VectorXd()), 1.0, cC, cK)),
         n);
     // Both hold finite differences (step 1e-7): agreement to ~1e-6.
     EXPECT_LT((S - J).cwiseAbs().maxCoeff(), 1e-6 * J.cwiseAbs().maxCoeff()) << "cC " << cC << " cK " << cK;
     // And the blocks are really there: without them the difference is O(1).
-    const Eigen::MatrixXd M = denseMatrix(Stepper::iterationMatrix(joint, stateOf(joint, q, zero, zero, VectorXd()),
+    const Eigen::MatrixXd M = denseMatrix(Stepper::iterationMatrix(joint, stateOf(q, zero, zero, VectorXd()),
                                                                    1.0, 0.0, 0.0));
     EXPECT_GT((J - M).cwiseAbs().maxCoeff(), 1e-2 * J.cwiseAbs().maxCoeff());
   }
@@ -351,7 +350,7 @@ TEST(RecursiveNewtonMatrix, BodyInertiaBlockMatchesFiniteDifferences) {
   const Mat3 J = k.orientation * J0 * k.orientation.transpose();
   const double cM = 1.0, cC = 0.7, cK = 0.3;
   const Eigen::MatrixXd R =
-      denseMatrix(Stepper::iterationMatrix(system, stateOf(system, q, v, vdot, VectorXd()), cM, cC, cK, false));
+      denseMatrix(Stepper::iterationMatrix(system, stateOf(q, v, vdot, VectorXd()), cM, cC, cK, false));
   // Body 0's rotary rows: cM J on its acceleration (columns n + 12 + 3..),
   // the rest on its pose and velocity (columns n + 3..).
   const Mat3 block = R.block<3, 3>(n + 3, n + 3) + R.block<3, 3>(n + 3, n + 12 + 3);
