@@ -187,7 +187,7 @@ struct SolverOptions {
   // tangent would hold a dense block of kRecursiveNewtonMatrixRates rates.
   enum class NewtonMatrix { Automatic, JointSpace, Recursive };
   NewtonMatrix newtonMatrix = NewtonMatrix::Automatic;
-  static constexpr int kRecursiveNewtonMatrixRates = 50;
+  static constexpr int kRecursiveNewtonMatrixRates = 80;
 };
 
 // Which outputs the FMU exposes. Empty lists with `all` false expose none.

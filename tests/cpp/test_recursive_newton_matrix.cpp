@@ -272,12 +272,12 @@ TEST(RecursiveNewtonMatrix, DampingAndStiffnessMatchTheJointSpaceWhereBIsNotLoad
 }
 
 TEST(RecursiveNewtonMatrix, ChainRunReachesTheJointSpaceAnswer) {
-  // A 60-bar pendulum chain released from horizontal (automatic choice: the
+  // A 90-bar pendulum chain released from horizontal (automatic choice: the
   // recursive form) against the joint-space form over 0.5 s: the same
   // motion to the Newton tolerance's accumulation, with at most 30 % more
   // Newton iterations (the neglected terms are O(h omega)), and no
   // rejected substep.
-  const int n = 60;
+  const int n = 90;
   std::ostringstream s;
   s.precision(17);
   s << R"({"format": "mfbd-scene/1", "name": "chain", "gravity": [0, -9.81, 0], "bodies": [)";
