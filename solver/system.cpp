@@ -6,6 +6,7 @@
 
 #include "coupling/joint_constraint.hpp"
 #include "rigid/force_elements.hpp"
+#include "rigid/joint_motion.hpp"
 #include "rigid/recursive_dynamics.hpp"
 
 namespace mfbd {
@@ -335,7 +336,7 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
   const bool recursive = auxiliaryCount(cM) > 0;
   if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
   if (recursive)
-    recursiveTangent(q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
+    recursiveTangent(t, q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
   else if (!model_.bodies.empty())
     rigidTangent(t, q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
   else
@@ -369,11 +370,18 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
 // wrenches and accelerations), of relative size h^2 |f| / (m L): Newton
 // converges linearly there, to the same answer (the residual is exact).
 // Statics (cM = 0) has only such terms: it uses the joint space.
-void System::recursiveTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+void System::recursiveTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                               const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                               Triplets& constraintJacobian) {
   const int nb = int(model_.bodies.size());
-  forwardKinematics(model_, data_, q, v, vdot);
+  // The residual's backward loop: the subtree wrenches z the geometric
+  // terms below act on (and the kinematics of q).
+  VectorXd r, phi;
+  rigidResidual(t, q, v, vdot, lambda, r, phi);
+  Configuration moved = q;
+  std::vector<int> blockOfRate(model_.velocityCount, -1);
+  for (std::size_t k = 0; k < model_.blocks.size(); ++k)
+    for (int d = 0; d < model_.blocks[k].size; ++d) blockOfRate[model_.blocks[k].velocityOffset + d] = int(k);
   // Blocks are written with every entry that can be nonzero, zeros
   // included, so that the pattern never changes: in full where they couple
   // poses, by their structure where that is fixed (unit diagonals, the
@@ -419,8 +427,66 @@ void System::recursiveTangent(const Configuration& q, const VectorXd& v, const V
     }
     const Joint& jt = model_.joints[b.inboardJoint];
     const Matrix6X& S = data_.joint[b.inboardJoint].motionSubspace;
+    // Geometric stiffness of the transmitted wrench z_i = [F; N]: the joint
+    // axes S turn rigidly with the parent, d(S^T z)/dphi_p = S_v^T skew(F) +
+    // S_w^T skew(N), and with the joint's own coordinates (universal,
+    // spherical, free: by central differences along the retraction); the
+    // lever of T_i^T z_i in the parent's balance stretches with dr. A loaded
+    // chain's tension as a string's transverse stiffness.
+    const Vec3& F = data_.subtreeForce[i];
+    const Vec3& N = data_.subtreeTorque[i];
+    Eigen::Matrix<double, Eigen::Dynamic, 3> dParent =
+        S.topRows<3>().transpose() * skew(F) + S.bottomRows<3>().transpose() * skew(N);
+    Eigen::MatrixXd dOwn(jt.dofs, jt.dofs);
+    {
+      const Mat3 AP = (b.parent == kGroundIndex ? Mat3::Identity() : data_.body[b.parent].orientation) *
+                      jt.parentMarker.orientation;
+      auto transmitted = [&](const Configuration& qj) {  // S(q)^T z at fixed parent pose
+        const JointMotion m = jointMotion(jt, qj, v.segment(jt.velocityOffset, jt.dofs));
+        const Mat3 AC = AP * m.rotation;
+        const Vec3 pC = AC * jt.childMarker.orientation.transpose() * jt.childMarker.position;
+        const Matrix3X Sw = AC * m.Hw;
+        const Matrix3X Sv = AP * m.Hv + skew(pC) * Sw;
+        return VectorXd(Sv.transpose() * F + Sw.transpose() * N);
+      };
+      // Only this joint's coordinate block moves: perturbed in place in one
+      // copy of q (a copy per rate would make the tangent O(n^2)).
+      const double eps = 1e-6;
+      for (int d = 0; d < jt.dofs; ++d) {
+        const CoordinateBlock& block = model_.blocks[blockOfRate[jt.velocityOffset + d]];
+        const int k = jt.velocityOffset + d - block.velocityOffset;
+        VectorXd column[2];
+        for (int side = 0; side < 2; ++side) {
+          const double e = side == 0 ? eps : -eps;
+          if (block.rotation >= 0) {
+            Mat3& R = moved.rotations[block.rotation];
+            const Mat3 saved = R;
+            R = rotateIncrementally(R, Vec3(e * Vec3::Unit(k)));
+            column[side] = transmitted(moved);
+            R = saved;
+          } else {
+            double& c = moved.scalars[block.scalarOffset + k];
+            const double saved = c;
+            c += e;
+            column[side] = transmitted(moved);
+            c = saved;
+          }
+        }
+        dOwn.col(d) = (column[0] - column[1]) / (2.0 * eps);
+      }
+    }
+    if (b.parent != kGroundIndex) {
+      const Mat3 lever = cK * skew(F);  // d(dr x F) = -skew(F) (dr_i - dr_p)
+      corner(bodyUnknown(b.parent) + 3, bodyUnknown(i), -lever);
+      corner(bodyUnknown(b.parent) + 3, bodyUnknown(b.parent), lever);
+    }
+    for (int d = 0; d < jt.dofs; ++d)
+      for (int e = 0; e < jt.dofs; ++e)
+        iteration.emplace_back(jt.velocityOffset + d, jt.velocityOffset + e, cK * dOwn(d, e));
     for (int d = 0; d < jt.dofs; ++d) {
       const int x = jt.velocityOffset + d;
+      if (b.parent != kGroundIndex)
+        for (int c = 0; c < 3; ++c) iteration.emplace_back(x, bodyUnknown(b.parent) + 3 + c, cK * dParent(d, c));
       for (int r = 0; r < 6; ++r) {
         iteration.emplace_back(wrenchUnknown(i) + r, x, S(r, d));
         iteration.emplace_back(accelerationUnknown(i) + r, x, S(r, d) + cC * D.rates(r, d));

@@ -74,7 +74,7 @@ class System : public Dynamics {
                     double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
   void jointForces(const Configuration& q, const VectorXd& v, VectorXd& tau) const;
   void weldForcesOnNodes(const VectorXd& lambda, VectorXd& r) const;
-  void recursiveTangent(const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
+  void recursiveTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                         double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
   void forceElementTangent(double cC, double cK, Triplets& iteration);
   void constraintRows(bool bodyColumns, Triplets& constraintJacobian);
