@@ -363,13 +363,13 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
 // springs and dampers, H = cC C + cK K of inertia (gyroscopic), force
 // elements and cut joints at body level, and D the derivatives of the
 // acceleration recursion's rate terms (Coriolis, centripetal) with respect
-// to the parent's velocity and the joint rates. Eliminating y, w and z
-// leaves A + B^T (cM M (B + cC dBias) + H B): the mass and damping blocks
-// of the joint-space form exactly; of the stiffness it leaves out the
-// variation of B with the configuration (dB/dq acting on the transmitted
-// wrenches and accelerations), of relative size h^2 |f| / (m L): Newton
-// converges linearly there, to the same answer (the residual is exact).
-// Statics (cM = 0) has only such terms: it uses the joint space.
+// to the parent's velocity and the joint rates, and the geometric stiffness
+// of the transmitted wrenches z (joint axes turning, levers stretching).
+// Eliminating y, w and z leaves the joint-space matrix: mass and damping
+// exactly, stiffness exactly where nothing accelerates; left out is the
+// turning of S and T acting on accelerations (relative size h^2 |a| / L):
+// Newton converges linearly there, to the same answer (the residual is
+// exact). Statics (cM = 0) uses the joint space (no auxiliary unknowns).
 void System::recursiveTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                               const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                               Triplets& constraintJacobian) {
