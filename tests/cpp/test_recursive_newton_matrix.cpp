@@ -125,6 +125,15 @@ IntegratorState stateOf(const Configuration& q, const VectorXd& v, const VectorX
   return st;
 }
 
+// cC C + cK K over the joint rates as the Newton matrix holds it: the Schur
+// complement onto velocities and multipliers, less its mass block.
+Eigen::MatrixXd jointRateBlock(System& s, const IntegratorState& st, double cC, double cK) {
+  const int k = s.velocityCount() + s.constraintCount();
+  const Eigen::MatrixXd all = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, cC, cK, false)), k);
+  const Eigen::MatrixXd mass = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, 0, 0, false)), k);
+  return (all - mass).topLeftCorner(s.velocityCount(), s.velocityCount());
+}
+
 }  // namespace
 
 TEST(RecursiveNewtonMatrix, PivotOrderLeavesTheSolutionUnchanged) {
@@ -210,13 +219,8 @@ TEST(RecursiveNewtonMatrix, DampingBlockIsTheJointSpaceOneAtAnyState) {
     for (int i = 0; i < m; ++i) lambda[i] = 10.0 * u(rng);
     Configuration q = joint.model().initialConfiguration;
     joint.retract(q, dq);
-    auto damping = [&](System& s) {
-      const IntegratorState st = stateOf(q, v, vdot, lambda);
-      const Eigen::MatrixXd MC = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, 1, 0, false)), n + m);
-      const Eigen::MatrixXd M = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, 0, 0, false)), n + m);
-      return Eigen::MatrixXd((MC - M).topLeftCorner(n, n));
-    };
-    const Eigen::MatrixXd C = damping(joint), Cr = damping(recursive);
+    const IntegratorState st = stateOf(q, v, vdot, lambda);
+    const Eigen::MatrixXd C = jointRateBlock(joint, st, 1.0, 0.0), Cr = jointRateBlock(recursive, st, 1.0, 0.0);
     EXPECT_GT(C.cwiseAbs().maxCoeff(), 1.0);
     EXPECT_LT((Cr - C).cwiseAbs().maxCoeff(), 1e-6 * C.cwiseAbs().maxCoeff()) << (Cr - C).cwiseAbs().maxCoeff();
   }
@@ -244,13 +248,8 @@ TEST(RecursiveNewtonMatrix, StiffnessBlockIsTheJointSpaceOneWhereNothingAccelera
     Configuration q = joint.model().initialConfiguration;
     joint.retract(q, dq);
     const VectorXd zero = VectorXd::Zero(n);
-    auto stiffness = [&](System& s) {
-      const IntegratorState st = stateOf(q, zero, zero, lambda);
-      const Eigen::MatrixXd MK = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, 0, 1, false)), n + m);
-      const Eigen::MatrixXd M = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, 0, 0, false)), n + m);
-      return Eigen::MatrixXd((MK - M).topLeftCorner(n, n));
-    };
-    const Eigen::MatrixXd K = stiffness(joint), Kr = stiffness(recursive);
+    const IntegratorState st = stateOf(q, zero, zero, lambda);
+    const Eigen::MatrixXd K = jointRateBlock(joint, st, 0.0, 1.0), Kr = jointRateBlock(recursive, st, 0.0, 1.0);
     EXPECT_GT(K.cwiseAbs().maxCoeff(), 1.0);
     EXPECT_LT((Kr - K).cwiseAbs().maxCoeff(), 1e-5 * K.cwiseAbs().maxCoeff()) << (Kr - K).cwiseAbs().maxCoeff();
   }
