@@ -6,7 +6,8 @@ Runs the C++ benchmark benchmarks/chain_cost.cpp (n uniform bars of 1/n kg
 on revolute joints, released from horizontal under gravity, advanced by
 mfbd::Simulation::doStep with substeps h = 1e-3 and communication steps of
 0.01 s over 0.2 s), compiling it first (g++ against build/libmfbd_solver.a)
-when the binary is missing or older than its sources. C++ rather than the
+when the binary is missing or older than its sources (flexible_cost's
+compile_benchmark). C++ rather than the
 FMU through fmpy, so that the FMI calls and the Python loop do not hide the
 solver's own cost at small n.
 
@@ -31,26 +32,11 @@ import csv
 import io
 import pathlib
 import subprocess
-import sys
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-BENCHMARKS = ROOT / "benchmarks"
+from flexible_cost import ROOT, compile_benchmark
+
 FORMS = ("joint_space", "recursive")
 CHAINS = {"1 m bars": 1.0, "1/n m bars": 0.0}  # --bar-length (0: 1/n)
-
-
-def compile_benchmark(build: pathlib.Path) -> pathlib.Path:
-    library = build / "libmfbd_solver.a"
-    if not library.exists():
-        sys.exit(f"{library} not found: build the project first (cmake --build {build})")
-    source, binary = BENCHMARKS / "chain_cost.cpp", build / "chain_cost"
-    if binary.exists() and binary.stat().st_mtime > max(source.stat().st_mtime, library.stat().st_mtime):
-        return binary
-    command = ["g++", "-O2", "-DNDEBUG", "-std=c++17", "-I", str(ROOT / "solver"), "-isystem", "/usr/include/eigen3",
-               "-I", "/usr/include/suitesparse", str(source), str(library), "-lklu", "-o", str(binary)]
-    print(" ".join(command))
-    subprocess.run(command, check=True)
-    return binary
 
 
 def slope(n, y):
@@ -102,7 +88,7 @@ def main():
     p.add_argument("--out", type=pathlib.Path, default=ROOT / "benchmarks" / "results")
     args = p.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    binary = compile_benchmark(args.build)
+    binary = compile_benchmark(args.build, "chain_cost")
     rows = []
     for chain, bar_length in CHAINS.items():
         for form in FORMS:
