@@ -18,6 +18,10 @@ System::System(Model model)
       flexibleInputs_(VectorXd::Zero(model_.flexible.inputCount)),
       forceInputs_(VectorXd::Zero(model_.forceInputCount)) {
   startDrives(0.0);
+  // Which coordinate block holds each rate (for per-joint perturbations).
+  blockOfRate_.assign(model_.velocityCount, -1);
+  for (std::size_t k = 0; k < model_.blocks.size(); ++k)
+    for (int d = 0; d < model_.blocks[k].size; ++d) blockOfRate_[model_.blocks[k].velocityOffset + d] = int(k);
   // A body moves with the rates of the joints on its path to ground.
   const int n = model_.rigidVelocityCount;
   std::vector<int> bodyOfColumn(n, kGroundIndex);
@@ -378,10 +382,7 @@ void System::recursiveTangent(double t, const Configuration& q, const VectorXd& 
   // terms below act on (and the kinematics of q).
   VectorXd r, phi;
   rigidResidual(t, q, v, vdot, lambda, r, phi);
-  Configuration moved = q;
-  std::vector<int> blockOfRate(model_.velocityCount, -1);
-  for (std::size_t k = 0; k < model_.blocks.size(); ++k)
-    for (int d = 0; d < model_.blocks[k].size; ++d) blockOfRate[model_.blocks[k].velocityOffset + d] = int(k);
+  Configuration moved = q;  // joint coordinates perturbed one block at a time
   // Blocks are written with every entry that can be nonzero, zeros
   // included, so that the pattern never changes: in full where they couple
   // poses, by their structure where that is fixed (unit diagonals, the
@@ -453,24 +454,17 @@ void System::recursiveTangent(double t, const Configuration& q, const VectorXd& 
       // copy of q (a copy per rate would make the tangent O(n^2)).
       const double eps = 1e-6;
       for (int d = 0; d < jt.dofs; ++d) {
-        const CoordinateBlock& block = model_.blocks[blockOfRate[jt.velocityOffset + d]];
-        const int k = jt.velocityOffset + d - block.velocityOffset;
+        const CoordinateBlock& block = model_.blocks[blockOfRate_[jt.velocityOffset + d]];
         VectorXd column[2];
         for (int side = 0; side < 2; ++side) {
-          const double e = side == 0 ? eps : -eps;
-          if (block.rotation >= 0) {
-            Mat3& R = moved.rotations[block.rotation];
-            const Mat3 saved = R;
-            R = rotateIncrementally(R, Vec3(e * Vec3::Unit(k)));
-            column[side] = transmitted(moved);
-            R = saved;
-          } else {
-            double& c = moved.scalars[block.scalarOffset + k];
-            const double saved = c;
-            c += e;
-            column[side] = transmitted(moved);
-            c = saved;
-          }
+          const bool rotation = block.rotation >= 0;
+          const Mat3 savedRotation = rotation ? moved.rotations[block.rotation] : Mat3::Identity();
+          const VectorXd savedScalars = rotation ? VectorXd() : VectorXd(moved.scalars.segment(block.scalarOffset, block.size));
+          retractBlock(block, moved,
+                       VectorXd::Unit(block.size, jt.velocityOffset + d - block.velocityOffset) * (side ? -eps : eps));
+          column[side] = transmitted(moved);
+          if (rotation) moved.rotations[block.rotation] = savedRotation;
+          else moved.scalars.segment(block.scalarOffset, block.size) = savedScalars;
         }
         dOwn.col(d) = (column[0] - column[1]) / (2.0 * eps);
       }

@@ -96,6 +96,7 @@ class System : public Dynamics {
   VectorXd tau_, rigid_;
   double constraintLengthScale_ = 1.0;  // of the last residual
   bool recursiveMatrix_ = false;  // Newton matrix in the recursive form (dynamics)
+  std::vector<int> blockOfRate_;  // model_.blocks index of each rate
   // Sparsity of the rigid tangent: the joint rates that move each body (its
   // path to ground), and which pairs of rates can couple at all (see the
   // constructor). Fixed by the topology, so the pattern never changes.

@@ -29,5 +29,7 @@ struct CoordinateBlock {
 
 // q <- q o exp(dq): the exact exponential map on each rotation block.
 void retract(const std::vector<CoordinateBlock>& blocks, Configuration& q, const VectorXd& dq);
+// One block of it: q's block b <- b o exp(dq), dq the block's own rates.
+void retractBlock(const CoordinateBlock& b, Configuration& q, const Eigen::Ref<const VectorXd>& dq);
 
 }  // namespace mfbd

@@ -262,7 +262,9 @@ TEST(SparseRigidTangent, TreeWithWeldedBeamMatchesFiniteDifferences) {
     for (int i = 0; i < n; ++i)
       EXPECT_LT((S - Sfd).row(i).cwiseAbs().maxCoeff(), 1e-5 * std::max(1.0, Sfd.row(i).cwiseAbs().maxCoeff()))
           << "row " << i << (cK != 0.0 ? " of K" : " of C");
-    if (cK != 0.0) EXPECT_LT((G - Gfd).cwiseAbs().maxCoeff(), 1e-7 * std::max(1.0, Gfd.cwiseAbs().maxCoeff()));
+    if (cK != 0.0) {
+      EXPECT_LT((G - Gfd).cwiseAbs().maxCoeff(), 1e-7 * std::max(1.0, Gfd.cwiseAbs().maxCoeff()));
+    }
   }
   // The side pendulum's rate couples with nothing in the arm's tree.
   Triplets iteration, jacobian;
