@@ -12,13 +12,17 @@ int TimeStepper::newtonSize(const Dynamics& system, double cM) {
   return system.velocityCount() + system.constraintCount() + system.auxiliaryCount(cM);
 }
 
+namespace {
+// A system index (velocities, then auxiliary unknowns) in the Newton matrix,
+// where the m multipliers sit between the two.
+int newtonIndex(const Dynamics& system, int index) {
+  return index < system.velocityCount() ? index : index + system.constraintCount();
+}
+}  // namespace
+
 std::vector<std::pair<int, int>> TimeStepper::pivotOrder(const Dynamics& system, double cM) {
-  const int n = system.velocityCount(), m = system.constraintCount();
   std::vector<std::pair<int, int>> order = system.pivotOrder(cM);
-  for (auto& [row, column] : order) {
-    if (row >= n) row += m;
-    if (column >= n) column += m;
-  }
+  for (auto& [row, column] : order) row = newtonIndex(system, row), column = newtonIndex(system, column);
   return order;
 }
 
@@ -28,7 +32,7 @@ void TimeStepper::iterationTriplets(Dynamics& system, const IntegratorState& at,
   all.clear();
   jacobian.clear();
   system.tangent(at.t, at.q, at.v, at.vdot, at.lambda, cM, cC, cK, all, jacobian);
-  auto place = [&](int index) { return index < n ? index : index + m; };
+  auto place = [&](int index) { return newtonIndex(system, index); };
   for (auto& t : all) t = Eigen::Triplet<double>(place(t.row()), place(t.col()), t.value());
   all.reserve(all.size() + 2 * jacobian.size() + n + m);
   for (const auto& t : jacobian) {
