@@ -347,8 +347,8 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
     constraintRows(false, constraintJacobian);
   if (!model_.flexible.empty()) {
     const bool inertia = model_.analysis == Analysis::Dynamic;
-    flexibleTangent(model_.flexible, nodes_, flexibleInputs_, t, inertia ? cM : 0.0, inertia ? cC : 0.0, cK,
-                    iteration);
+    flexibleTangent(model_.flexible, nodes_, model_.gravity, flexibleInputs_, t, inertia, inertia ? cM : 0.0,
+                    inertia ? cC : 0.0, cK, iteration);
     weldTangent(lambda, cK, recursive, iteration);
   }
 }

@@ -1,6 +1,6 @@
 // Scene flexible bodies -> FlexibleMesh: node coordinates and supports,
-// elements from their reference poses and mass (consistent or lumped
-// translational, lumped rotary), point masses,
+// elements from their reference poses and mass (consistent centre-line
+// mass or lumped translational, lumped rotary), point masses,
 // loads, drives and their FMI inputs.
 #include <Eigen/Eigenvalues>
 

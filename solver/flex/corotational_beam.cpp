@@ -399,6 +399,59 @@ Vec7 localDeformationVector(const Kinematics& k) {
 
 }  // namespace
 
+namespace {
+
+// q of the shallow arch and its gradient on e_l (nonzero on the bending
+// pairs (2, 5) and (3, 6)).
+double archStrain(const Vec7& e, Vec7& gradient) {
+  gradient.setZero();
+  double q = 0.0;
+  for (int a = 2; a <= 3; ++a) {
+    const double t1 = e[a], t2 = e[a + 3];
+    q += (2.0 * t1 * t1 - t1 * t2 + 2.0 * t2 * t2) / 30.0;
+    gradient[a] = (4.0 * t1 - t2) / 30.0;
+    gradient[a + 3] = (4.0 * t2 - t1) / 30.0;
+  }
+  return q;
+}
+
+}  // namespace
+
+Vec7 localElasticForce(const CorotationalBeam& beam, const Vec7& e) {
+  Vec7 g;
+  const double q = archStrain(e, g);
+  const double EA = beam.section.EA, N = EA * (e[0] / beam.L0 + q);
+  Vec7 f = beam.localStiffness * e;
+  f[0] = N;
+  f += (N * beam.L0) * g;  // g[0] = 0
+  return f;
+}
+
+Mat7 localTangentExcess(const CorotationalBeam& beam, const Vec7& e) {
+  Vec7 g;
+  const double q = archStrain(e, g);
+  const double EA = beam.section.EA, L0 = beam.L0, N = EA * (e[0] / L0 + q);
+  // d/de of [N; K_l e + N L0 g] minus K_l: eps's gradient is [1/L0; g].
+  Vec7 gradient = g;
+  gradient[0] = 1.0 / L0;
+  Mat7 D = (EA * L0) * gradient * gradient.transpose();
+  D(0, 0) = 0.0;  // EA / L0, already in K_l
+  for (int a = 2; a <= 3; ++a) {
+    D(a, a) += N * L0 * 4.0 / 30.0;
+    D(a + 3, a + 3) += N * L0 * 4.0 / 30.0;
+    D(a, a + 3) -= N * L0 / 30.0;
+    D(a + 3, a) -= N * L0 / 30.0;
+  }
+  return D;
+}
+
+double localStrainEnergy(const CorotationalBeam& beam, const Vec7& e) {
+  Vec7 g;
+  const double eps = e[0] / beam.L0 + archStrain(e, g);
+  return 0.5 * e.dot(beam.localStiffness * e) - 0.5 * beam.section.EA / beam.L0 * e[0] * e[0] +
+         0.5 * beam.section.EA * beam.L0 * eps * eps;
+}
+
 CorotationalBeam CorotationalBeam::fromReference(const NodePose& n1, const NodePose& n2,
                                                  const Vec3& sectionY,
                                                  const BeamSection& section) {
@@ -441,10 +494,11 @@ LocalDeformation localDeformation(const CorotationalBeam& beam, const NodePose& 
 
 namespace {
 
-// f_l = K_l e_l + beta K_l edot_l, edot_l = B [v1; omega1; v2; omega2].
+// f_l = elasticity + beta K_l edot_l, edot_l = B [v1; omega1; v2; omega2]
+// (the damping stays proportional to the linear local stiffness).
 Vec7 localForce(const CorotationalBeam& beam, const Kinematics& k, const Vec12& v, double dampingBeta) {
   const Mat7& Kl = beam.localStiffness;
-  Vec7 fl = Kl * localDeformationVector(k);
+  Vec7 fl = localElasticForce(beam, localDeformationVector(k));
   if (dampingBeta != 0.0) fl += dampingBeta * (Kl * strainIncrement(beam, k, v));
   return fl;
 }
@@ -534,7 +588,7 @@ bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const
   Vec7 el;
   el << u, theta0, theta1;
   const Mat7& Kl = beam.localStiffness;
-  Vec7 fl = Kl * el;
+  Vec7 fl = localElasticForce(beam, el);
   if (dampingBeta != 0.0) {
     // edot_l = B v (strainIncrement)
     const Vec3 spin = chordSpin(v2.v - v1.v) + e1 * (twist0.dot(v1.omega) + twist1.dot(v2.omega));
@@ -578,6 +632,8 @@ BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
   const Eigen::Matrix<double, 12, 7> BtKl = localStiffnessTimes(beam.localStiffness, k.B).transpose();
   out.K = BtKl.lazyProduct(k.B);
   out.C = dampingBeta * out.K;
+  const Mat7x12 excessB = localTangentExcess(beam, localDeformationVector(k)).lazyProduct(k.B);
+  out.K += k.B.transpose().lazyProduct(excessB);
   addGeometricStiffness(beam, k, fl, v, dampingBeta, BtKl, out.K);
   out.valid = out.f.allFinite() && out.K.allFinite();
   return out;
@@ -609,12 +665,6 @@ NodalInertia lumpedNodalInertia(const CorotationalBeam& beam, int node) {
   inertia.m = beam.section.rhoA * half;
   inertia.J = C * beam.section.rhoJ.asDiagonal() * C.transpose() * half;
   return inertia;
-}
-
-TranslationalInertiaForces consistentTranslationalForces(double mass, const Vec3& a1, const Vec3& a2,
-                                                         const Vec3& gravity) {
-  const Vec3 d1 = a1 - gravity, d2 = a2 - gravity;
-  return {mass / 6.0 * (2.0 * d1 + d2), mass / 6.0 * (d1 + 2.0 * d2)};
 }
 
 }  // namespace mfbd

@@ -8,8 +8,9 @@
 // derivative).
 // Local deformations e_l = [u; theta1; theta2] (elongation and rotation
 // vectors of the nodes relative to the corotated frame, logSO3) carry a local
-// linear Timoshenko stiffness; f = B^T f_l with the consistent tangent
-// K = B^T K_l B + d(B^T)/dq f_l.
+// Timoshenko element whose axial strain is the shallow arch's (localElastic-
+// Force below); f = B^T f_l with the consistent tangent
+// K = B^T K_t B + d(B^T)/dq f_l, K_t = df_l/de_l.
 //
 // Node and force conventions are those of flex/nodal_inertia.hpp; element
 // vectors are ordered [f1 (world); m1 (node-1 frame); f2; m2], tangents are
@@ -45,8 +46,27 @@ struct CorotationalBeam {
   // numbers.
   bool identityC1 = true, identityC2 = true;
   BeamSection section;
-  Mat7 localStiffness = Mat7::Zero();  // on [u; theta1; theta2]
+  Mat7 localStiffness = Mat7::Zero();  // linear, on [u; theta1; theta2]
 };
+
+// The local element's elasticity. Its axial strain is the mean strain of the
+// shallow arch through the cubic deflection line the end rotations make
+// (Crisfield, "Non-linear finite element analysis of solids and
+// structures" vol. 1, 1991; Le, Battini & Hjiaj, Comput. Struct. 89, 2011),
+//   eps = u / L0 + q,  q = (2 a1^2 - a1 a2 + 2 a2^2 + 2 b1^2 - b1 b2 + 2 b2^2) / 30,
+// a_i, b_i the bending rotations theta_i,y and theta_i,z, with the energy
+//   1/2 EA L0 eps^2 + 1/2 e_l^T K_l e_l - 1/2 (EA / L0) u^2
+// (K_l: localStiffness, the linear Timoshenko matrix). The axial force
+// N = EA eps then carries the bowing of the element between its nodes: the
+// local geometric stiffness N L0 / 30 [4 -1; -1 4] on each bending pair,
+// which the chord's rotation alone (the corotational part) misses, and a
+// pure bending moment gives the circle's chord shortening with N = 0 (with
+// the linear local element it would compress the bar). Both leave an
+// O(L0^2) error per element otherwise.
+Vec7 localElasticForce(const CorotationalBeam& beam, const Vec7& e);
+// K_t - K_l: what the shallow arch adds to the local tangent.
+Mat7 localTangentExcess(const CorotationalBeam& beam, const Vec7& e);
+double localStrainEnergy(const CorotationalBeam& beam, const Vec7& e);
 
 // Local deformations and corotated frame of a configuration (for outputs).
 struct LocalDeformation {
@@ -104,22 +124,5 @@ SectionForces sectionForces(const CorotationalBeam& beam, const NodePose& n1,
 // Lumped inertia of half the element at node 1 or 2 (node = 1 or 2):
 // m = rhoA L0 / 2, J = C_i diag(rhoJ) C_i^T L0 / 2 in the node frame.
 NodalInertia lumpedNodalInertia(const CorotationalBeam& beam, int node);
-
-// Consistent translational mass of the element (Crisfield, Galvanetto &
-// Jelenic, "Dynamics of 3-D co-rotational beams", Comput. Mech. 20, 1997):
-// the centre line interpolated linearly between the nodes,
-// r(x) = (1 - x/L0) r1 + (x/L0) r2, gives
-//   M_t = rhoA L0 / 6 [[2 I, I], [I, 2 I]]   on [rddot1; rddot2],
-// constant in the world frame: no convective or gyroscopic term, and no
-// position or velocity tangent. (The rotary inertia stays lumped at the
-// nodes, lumpedNodalInertia's J, where its gyroscopic term lives.)
-// The force on [r1; r2] is inertia minus weight, M_t [a1 - g; a2 - g]
-// (weight (rhoA L0 / 2) g per node, as lumped); `mass` = rhoA L0.
-struct TranslationalInertiaForces {
-  Vec3 f1 = Vec3::Zero(), f2 = Vec3::Zero();
-};
-
-TranslationalInertiaForces consistentTranslationalForces(double mass, const Vec3& a1, const Vec3& a2,
-                                                         const Vec3& gravity);
 
 }  // namespace mfbd

@@ -1,5 +1,7 @@
 #include "flex/flexible_energy.hpp"
 
+#include "flex/consistent_mass.hpp"
+
 namespace mfbd {
 
 FlexibleEnergy flexibleBodyEnergy(const FlexibleMesh& mesh, const FlexibleBody& body,
@@ -16,11 +18,12 @@ FlexibleEnergy flexibleBodyEnergy(const FlexibleMesh& mesh, const FlexibleBody& 
     const LocalDeformation d = localDeformation(el.beam, nodes[el.node1].pose, nodes[el.node2].pose);
     Vec7 local;
     local << d.u, d.theta1, d.theta2;
-    e.strain += 0.5 * local.dot(el.beam.localStiffness * local);
-    if (el.mass > 0.0) {  // consistent translational mass rhoA L0 / 6 [[2 I, I], [I, 2 I]], linear interpolation
+    e.strain += localStrainEnergy(el.beam, local);
+    if (el.mass > 0.0) {  // the consistent centre-line mass
       const NodeState &a = nodes[el.node1], &b = nodes[el.node2];
-      e.kinetic += el.mass / 6.0 * (a.velocity.v.squaredNorm() + a.velocity.v.dot(b.velocity.v) + b.velocity.v.squaredNorm());
-      e.gravity -= el.mass * gravity.dot(0.5 * (a.pose.r + b.pose.r));
+      const ConsistentEnergy c = consistentEnergy(el.beam, el.mass, a.pose, a.velocity, b.pose, b.velocity, gravity);
+      e.kinetic += c.kinetic;
+      e.gravity += c.gravity;
     }
   }
   return e;

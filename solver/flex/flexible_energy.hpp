@@ -1,9 +1,9 @@
 // Energies of a flexible body, for outputs (energy balance is how a user
 // checks a conservative run): kinetic 1/2 v^T M v of its nodal inertia and
-// consistent element mass,
-// strain 1/2 e_l^T K_l e_l of its elements' local deformations (the
-// potential whose gradient is the elastic internal force), and the
-// potential of gravity -m g . r of its nodal and element masses.
+// consistent element mass (flex/consistent_mass.hpp), strain energy of its
+// elements' local deformations (localStrainEnergy: the potential whose
+// gradient is the elastic internal force), and the potential of gravity
+// -m g . r of its nodal and element masses.
 #pragma once
 #include "flex/flexible_mesh.hpp"
 

@@ -1,5 +1,7 @@
 #include "flex/flexible_mesh.hpp"
 
+#include "flex/consistent_mass.hpp"
+
 namespace mfbd {
 
 double DriveState::angle(const FlexibleMesh& mesh, const VectorXd& inputs, int drive, double t) const {
@@ -118,11 +120,12 @@ bool elementForce(const FlexElement& e, const NodeState& s1, const NodeState& s2
                   bool withInertia, Vec12& f) {
   if (!internalForceVector(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping, f)) return false;
   if (e.mass > 0.0) {
-    const Vec3 zero = Vec3::Zero();
-    const TranslationalInertiaForces m = consistentTranslationalForces(
-        e.mass, withInertia ? s1.acceleration.a : zero, withInertia ? s2.acceleration.a : zero, gravity);
-    f.segment<3>(0) += m.f1;
-    f.segment<3>(6) += m.f2;
+    if (withInertia) {
+      f += consistentInertiaForce(e.beam, e.mass, s1.pose, s1.velocity, s1.acceleration, s2.pose, s2.velocity,
+                                  s2.acceleration, gravity);
+    } else {  // statics: the consistent weight alone
+      f += consistentInertiaForce(e.beam, e.mass, s1.pose, {}, {}, s2.pose, {}, {}, gravity);
+    }
   }
   return true;
 }
@@ -145,8 +148,9 @@ bool flexibleResidual(const FlexibleMesh& mesh, const std::vector<NodeState>& no
   return true;
 }
 
-void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nodes, const VectorXd& inputs, double t,
-                     double cM, double cC, double cK, Triplets& iteration) {
+void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nodes, const Vec3& gravity,
+                     const VectorXd& inputs, double t, bool withInertia, double cM, double cC, double cK,
+                     Triplets& iteration) {
   for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
     const FlexNode& n = mesh.nodes[i];
     const NodalInertiaForces in = nodalInertiaForces(n.inertia, nodes[i].velocity, nodes[i].acceleration);
@@ -161,14 +165,12 @@ void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nod
       const BeamForces f = internalForces(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping);
       S = cK * f.K + cC * f.C;
     }
-    if (e.mass > 0.0 && cM != 0.0) {  // cM M_t, rhoA L0 / 6 [[2 I, I], [I, 2 I]]
-      const double m = cM * e.mass / 6.0;
-      for (int i = 0; i < 3; ++i) {
-        S(i, i) += 2.0 * m;
-        S(6 + i, 6 + i) += 2.0 * m;
-        S(i, 6 + i) += m;
-        S(6 + i, i) += m;
-      }
+    if (e.mass > 0.0) {
+      const ConsistentInertia in =
+          withInertia ? consistentInertia(e.beam, e.mass, s1.pose, s1.velocity, s1.acceleration, s2.pose,
+                                          s2.velocity, s2.acceleration, gravity)
+                      : consistentInertia(e.beam, e.mass, s1.pose, {}, {}, s2.pose, {}, {}, gravity);
+      S += cM * in.M + cC * in.C + cK * in.K;  // statics: the consistent weight's K alone
     }
     const FlexNode &a = mesh.nodes[e.node1], &b = mesh.nodes[e.node2];
     const bool freeA = isFree(a), freeB = isFree(b);

@@ -37,7 +37,7 @@ struct FlexElement {
   int node1 = 0, node2 = 0;  // mesh node indices
   CorotationalBeam beam;
   double damping = 0.0;
-  // rhoA L0 of the consistent translational mass (consistentTranslationalForces);
+  // rhoA L0 of the consistent centre-line mass (flex/consistent_mass.hpp);
   // 0 when the element's mass is lumped into its nodes' inertia.
   double mass = 0.0;
 };
@@ -120,8 +120,10 @@ bool elementForce(const FlexElement& e, const NodeState& s1, const NodeState& s2
 bool flexibleResidual(const FlexibleMesh& mesh, const std::vector<NodeState>& nodes, const Vec3& gravity,
                       const VectorXd& inputs, double t, bool withInertia, VectorXd& r);
 
-// cM M + cC C + cK K of the same terms, projected on the free DOFs.
-void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nodes, const VectorXd& inputs, double t,
-                     double cM, double cC, double cK, Triplets& iteration);
+// cM M + cC C + cK K of the same terms, projected on the free DOFs
+// (without inertia, cM and cC must be 0: K of the weight and loads alone).
+void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nodes, const Vec3& gravity,
+                     const VectorXd& inputs, double t, bool withInertia, double cM, double cC, double cK,
+                     Triplets& iteration);
 
 }  // namespace mfbd

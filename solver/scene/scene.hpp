@@ -122,8 +122,9 @@ struct NodalLoadSpec {
 };
 
 // Translational inertia of a flexible body's elements: the consistent mass
-// of the linearly interpolated centre line, or half of each element lumped
-// at its nodes. The rotary inertia is lumped at the nodes either way.
+// of the cubic (Hermite) centre line (flex/consistent_mass.hpp), or half of
+// each element lumped at its nodes. The rotary inertia of the section is
+// lumped at the nodes either way.
 enum class BeamMass { Consistent, Lumped };
 
 // A flexible body: nodes (position; orientation of a beam line's section

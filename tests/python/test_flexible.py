@@ -39,9 +39,12 @@ def test_end_moment_rolls_the_cantilever_into_a_circle(tmp_path):
     e16, e32, e64 = (end_moment_tip_errors(tmp_path, n) for n in (16, 32, 64))
     assert e16.max() < 1e-2 and e64.max() < 1e-3, (e16, e64)
     assert e16[-1] < 1e-9 and e64[-1] < 1e-9  # the full circle closes exactly (a regular polygon)
+    # Fourth order (the issue asks for at least second): the shallow-arch
+    # strain puts the nodes on the circle's chords to O(alpha^4) (the linear
+    # local element kept the chords at L / n, second order).
     for coarse, fine in ((e16, e32), (e32, e64)):
         order = np.log2(coarse[:3] / fine[:3])
-        assert np.all(np.abs(order - 2.0) < 0.1), order
+        assert np.all(np.abs(order - 4.0) < 0.1), order
 
 
 def test_tip_dead_load_matches_the_elastica_table(tmp_path):
@@ -164,19 +167,20 @@ SPIN_ELONGATION = np.tan(10 * SPIN_K) / SPIN_K - 10  # 5.143175e-4 m
 def test_spin_up_beam_steady_elongation_and_root_force(tmp_path):
     t, _, length, root_force = spin_up(tmp_path, 8, 2e-3, 25.0, "spin8")
     steady = t > 18
-    assert abs(np.mean(length[steady] - 10.0) - SPIN_ELONGATION) < 1e-7
+    assert abs(np.mean(length[steady] - 10.0) - SPIN_ELONGATION) < 1e-6  # 4.1e-7 at 8 elements
     assert abs(np.mean(root_force[steady]) / 2160.0 - 1) < 1e-3
 
 
 def test_consistent_mass_gets_the_spin_up_elongation_at_four_elements(tmp_path):
-    # The consistent mass's centrifugal load is the Galerkin load: 4e-10 m
-    # off at 4 elements in the steady linear problem; lumped nodal masses
-    # load the bar 1.61e-5 m too much (3 %), falling as 1/N^2.
+    # Lumped nodal masses load the bar 1.61e-5 m too much (3 %), falling as
+    # 1/N^2. The consistent mass's axial part is the cubic centre line's
+    # (N1, N3 of flex/consistent_mass.hpp), not the linear bar's Galerkin
+    # load: 1.6e-6 m (0.3 %) at 4 elements, also 1/N^2.
     errors = {}
     for mass in ("consistent", "lumped"):
         t, _, length, _ = spin_up(tmp_path, 4, 2e-3, 25.0, f"spin4{mass}", mass)
         errors[mass] = np.mean(length[t > 18] - 10.0) - SPIN_ELONGATION
-    assert abs(errors["consistent"]) < 1e-7, errors
+    assert abs(errors["consistent"]) < 2e-6, errors
     assert abs(errors["lumped"] / 1.608e-5 - 1) < 0.05, errors
 
 
