@@ -184,9 +184,22 @@ def series_label(row):
     return f"{row['code']}: {row['model']}" if row.get("model") else row["code"]
 
 
+def pareto_front(points):
+    """Indices of the (time, error) points no cheaper point beats in error,
+    cheapest first: a code at its best settings."""
+    front, best = [], np.inf
+    for i in sorted(range(len(points)), key=lambda k: points[k][0]):
+        if points[i][1] < best:
+            front.append(i)
+            best = points[i][1]
+    return front
+
+
 def plot_precision_work(ax, rows, error_key="error", annotate="h_or_elements", floor=1e-16):
-    """Log-log error against wall time, one line per code and model, each
-    point labelled with its step size or element count."""
+    """Log-log error against wall time, one series per code and model: every
+    run a marker labelled with `annotate` (a column, or a function of the
+    row), a line through the series' Pareto front (open markers: runs a
+    cheaper run of the same series beats)."""
     palette = {OURS: [("C0", "o"), ("C9", "v")], EXUDYN: [("C3", "s"), ("C2", "^"), ("C1", "D")]}
     labels = list(dict.fromkeys(series_label(r) for r in rows))
     for label in labels:
@@ -198,13 +211,31 @@ def plot_precision_work(ax, rows, error_key="error", annotate="h_or_elements", f
         code = sel[0]["code"]
         same_code = [lab for lab in labels if lab.startswith(code)]
         color, marker = palette[code][same_code.index(label) % len(palette[code])]
-        style = dict(color=color, marker=marker)
-        ax.loglog(x, y, "-", label=label, **style)
+        front = pareto_front(list(zip(x, y)))
+        ax.loglog(x[front], y[front], "-", marker=marker, color=color, label=label)
+        beaten = [i for i in range(len(sel)) if i not in front]
+        ax.loglog(x[beaten], y[beaten], linestyle="none", marker=marker, color=color, mfc="none", alpha=0.6)
         for xi, yi, r in zip(x, y, sel):
-            ax.annotate(_short(r[annotate]), (xi, yi), textcoords="offset points", xytext=(4, 3), fontsize=6,
-                        color=style["color"])
+            text = annotate(r) if callable(annotate) else _short(r[annotate])
+            ax.annotate(text, (xi, yi), textcoords="offset points", xytext=(4, 3), fontsize=6, color=color)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
+
+
+def refinement_grid(pairs, meshes=2):
+    """The paired refinements (n, h) plus the finer steps on the `meshes`
+    coarsest meshes: where the spatial error is small, a code's best
+    setting is a coarse mesh with a fine step; both codes run the same grid
+    and the Pareto front of each shows it at its best."""
+    grid = list(pairs)
+    for i, (n, _) in enumerate(pairs[:meshes]):
+        grid += [(n, h) for _, h in pairs[i + 1:]]
+    return grid
+
+
+def mesh_and_step(row):
+    """Annotation of a run over elements and substep: "n / h"."""
+    return f"{_short(row['h_or_elements'])}/{float(row['h_s']):.0e}"
 
 
 def _short(value):

@@ -2,7 +2,8 @@
 """F4 spin-up beam driven through a motor (issue 5): a rigid hub on a driven
 revolute joint, the beam's root welded to the hub. Our FMU against Exudyn,
 error against run time over paired refinements (elements n, substep h) =
-(4, 4e-3), (8, 2e-3), (16, 1e-3), (32, 5e-4); each run simulates 7 s
+(4, 4e-3), (8, 2e-3), (16, 1e-3), (32, 5e-4) and the finer steps on n = 4
+and 8; each run simulates 7 s
 (outputs every 0.04 s) and yields the tip deflection in the rotating frame at
 t = 7 s. Error: against a converged run of our FMU (n = 64 and 128 at
 h = 5e-4, extrapolated in n, order 2), written to f4_motor_reference.csv
@@ -36,11 +37,12 @@ import time
 import numpy as np
 
 from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, load_scene, \
-    plot_precision_work, read_csv, save_figure, write_csv
+    plot_precision_work, refinement_grid, mesh_and_step, read_csv, save_figure, write_csv
 from peer_f4_spin_up import EA, EI, GA, L, RHO_A, RHO_I, RHO_INF, _hub_offset, _hub_rate, extrapolated, hub_angle
 
 HUB_MASS, HUB_INERTIA = 10.0, 2.0
 PAIRS = [(4, 4e-3), (8, 2e-3), (16, 1e-3), (32, 5e-4)]
+GRID = refinement_grid(PAIRS)  # PAIRS plus finer steps on the two coarsest meshes
 REFERENCE = [(64, 5e-4), (128, 5e-4)]
 STOP, OUTPUT = 7.0, 0.04  # the metric is at STOP; every h divides OUTPUT
 
@@ -135,7 +137,7 @@ def main():
 
     factory = SceneFactory()
     try:
-        fmus = {n: factory.fmu(motor_scene(n), f"motor{n}") for n, _ in PAIRS + REFERENCE}
+        fmus = {n: factory.fmu(motor_scene(n), f"motor{n}") for n, _ in GRID + REFERENCE}
         runs = {OURS: lambda n, h: ours(fmus[n], n, h), EXUDYN: exudyn_motor_2d}
         reference_rows, extrapolations = [], {}
         for code, run in runs.items():
@@ -166,7 +168,7 @@ def main():
         models = {OURS: "hub on driven revolute, fixed joint to 3D corotational beam",
                   EXUDYN: "RigidBody2D hub, Revolute2D + coordinate drive, weld to BeamGeometricallyExact2D"}
         for code, run in runs.items():
-            for n, h in PAIRS:
+            for n, h in GRID:
                 r = best_of(lambda: run(n, h), args.repeats)
                 rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"],
                                  error=abs(r["tip"] - reference), model=models[code], h_s=h,
@@ -186,11 +188,11 @@ def main():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
-    plot_precision_work(ax, rows)
+    plot_precision_work(ax, rows, annotate=mesh_and_step)
     ax.set_ylabel("tip deflection error at t = 7 s [m]")
     ax.set_xlabel("wall time for 7 s simulated [s]")
     ax.set_title(f"F4 motor-driven hub: tip deflection at 7 s vs converged {reference:.6f} m\n"
-                 "(labels: elements; h = 0.016/n)", fontsize=9)
+                 "(labels: elements / substep)", fontsize=9)
     png = args.out / "f4_motor_precision.png"
     save_figure(fig, png)
     print(f"wrote {(args.out / 'f4_motor_precision.csv').resolve()}\nwrote {png.resolve()}")
