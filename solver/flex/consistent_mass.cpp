@@ -4,43 +4,70 @@ namespace mfbd {
 
 namespace {
 
-// int_0^1 N N^T dxi of the Hermite functions on [r1; s1; r2; s2], times 420.
-constexpr double kHermite[4][4] = {{156, 22, 54, -13}, {22, 4, 13, -3}, {54, 13, 156, -22}, {-13, -3, -22, 4}};
+using Mat3x12 = Eigen::Matrix<double, 3, 12>;
+
+// int_0^1 N N^T dxi of the shape functions [1 - xi, xi, N2, N4] on
+// [r1; r2; b1; b2], times 420.
+constexpr double kShape[4][4] = {{140, 70, 21, -14}, {70, 140, 14, -21}, {21, 14, 4, -3}, {-14, -21, -3, 4}};
+
+// The chord c = r2 - r1 and its direction e = c / l with their rates:
+// edot = P cdot / l and eddot = (P cddot - 2 edot ldot - e (edot . cdot)) / l,
+// P = I - e e^T, ldot = e . cdot.
+struct Chord {
+  Vec3 e, cdot, cddot, eDot, eDdot;
+  Mat3 P;
+  double l = 0.0, lDot = 0.0, s = 0.0;  // s = edot . cdot
+};
+
+Chord chord(const NodePose& n1, const NodeVelocity& v1, const NodeAcceleration& a1, const NodePose& n2,
+            const NodeVelocity& v2, const NodeAcceleration& a2) {
+  Chord c;
+  const Vec3 x = n2.r - n1.r;
+  c.l = x.norm();
+  c.e = x / c.l;
+  c.P = Mat3::Identity() - c.e * c.e.transpose();
+  c.cdot = v2.v - v1.v;
+  c.cddot = a2.a - a1.a;
+  c.eDot = c.P * c.cdot / c.l;
+  c.lDot = c.e.dot(c.cdot);
+  c.s = c.eDot.dot(c.cdot);
+  c.eDdot = (c.P * c.cddot - 2.0 * c.lDot * c.eDot - c.s * c.e) / c.l;
+  return c;
+}
 
 // What the inertia of the element needs from one node.
 struct NodeTerms {
   Vec3 d;      // element axis in the node frame, C e1
-  Vec3 sddot;  // L0 A (omegadot x d + omega x (omega x d)), world
-  Vec3 b;      // the same in the node frame
+  Vec3 local;  // L0 (omegadot x d + omega x (omega x d)), node frame: tddot L0 there
 };
 
-NodeTerms nodeTerms(const Mat3& C, double L0, const NodePose& n, const NodeVelocity& v, const NodeAcceleration& a) {
-  NodeTerms t;
-  t.d = C.col(0);
-  t.b = L0 * (a.omegaDot.cross(t.d) + v.omega.cross(v.omega.cross(t.d)));
-  t.sddot = n.A * t.b;
-  return t;
+NodeTerms nodeTerms(const Mat3& C, double L0, const NodeVelocity& v, const NodeAcceleration& a) {
+  const Vec3 d = C.col(0);
+  return {d, L0 * (a.omegaDot.cross(d) + v.omega.cross(v.omega.cross(d)))};
 }
 
-// F = M_p (pddot - g_p), the four world vectors on [r1; s1; r2; s2].
-std::array<Vec3, 4> pForces(double mass, const Vec3& a1, const Vec3& s1, const Vec3& a2, const Vec3& s2,
-                            const Vec3& gravity) {
-  const std::array<Vec3, 4> p{{a1 - gravity, s1, a2 - gravity, s2}};
-  std::array<Vec3, 4> F;
+// F = M_p (pddot - g_p) on [r1; r2; b1; b2] (world vectors; `mass` / 420 x kShape).
+template <class Block>
+std::array<Block, 4> shapeTimes(double mass, const std::array<Block, 4>& p) {
   const double m = mass / 420.0;
+  std::array<Block, 4> F;
   for (int k = 0; k < 4; ++k)
-    F[k] = m * (kHermite[k][0] * p[0] + kHermite[k][1] * p[1] + kHermite[k][2] * p[2] + kHermite[k][3] * p[3]);
+    F[k] = m * (kShape[k][0] * p[0] + kShape[k][1] * p[1] + kShape[k][2] * p[2] + kShape[k][3] * p[3]);
   return F;
 }
 
-// f = W^T F: forces on the positions; on the rotations L0 d x (A^T F_s).
-Vec12 generalized(const std::array<Vec3, 4>& F, double L0, const NodePose& n1, const Vec3& d1, const NodePose& n2,
-                  const Vec3& d2) {
-  Vec12 f;
-  f.segment<3>(0) = F[0];
-  f.segment<3>(3) = L0 * d1.cross(n1.A.transpose() * F[1]);
-  f.segment<3>(6) = F[2];
-  f.segment<3>(9) = L0 * d2.cross(n2.A.transpose() * F[3]);
+// The virtual displacements' map transposed, J^T F: dp = J dq with
+//   dr_i, db_i = L0 A_i (dtheta_i x d_i) - (L0 / l) P (dr2 - dr1),
+// so the forces are [F1 + k; L0 d1 x (A1^T G1); F2 - k; L0 d2 x (A2^T G2)],
+// k = (L0 / l) P (G1 + G2). For 3-vectors or 3 x 12 blocks alike.
+template <class Block>
+Eigen::Matrix<double, 12, Block::ColsAtCompileTime> mapTranspose(const std::array<Block, 4>& F, double L0,
+                                                                  const Chord& c, const Mat3 A[2], const Vec3 d[2]) {
+  Eigen::Matrix<double, 12, Block::ColsAtCompileTime> f;
+  const Block k = (L0 / c.l) * (c.P * (F[2] + F[3]));
+  f.template middleRows<3>(0) = F[0] + k;
+  f.template middleRows<3>(6) = F[1] - k;
+  for (int i = 0; i < 2; ++i) f.template middleRows<3>(3 + 6 * i) = L0 * skew(d[i]) * (A[i].transpose() * F[2 + i]);
   return f;
 }
 
@@ -49,52 +76,82 @@ Vec12 generalized(const std::array<Vec3, 4>& F, double L0, const NodePose& n1, c
 Vec12 consistentInertiaForce(const CorotationalBeam& beam, double mass, const NodePose& n1, const NodeVelocity& v1,
                              const NodeAcceleration& a1, const NodePose& n2, const NodeVelocity& v2,
                              const NodeAcceleration& a2, const Vec3& gravity) {
-  const NodeTerms t1 = nodeTerms(beam.C1, beam.L0, n1, v1, a1), t2 = nodeTerms(beam.C2, beam.L0, n2, v2, a2);
-  return generalized(pForces(mass, a1.a, t1.sddot, a2.a, t2.sddot, gravity), beam.L0, n1, t1.d, n2, t2.d);
+  const double L0 = beam.L0;
+  const Chord c = chord(n1, v1, a1, n2, v2, a2);
+  const NodeTerms t1 = nodeTerms(beam.C1, L0, v1, a1), t2 = nodeTerms(beam.C2, L0, v2, a2);
+  const std::array<Vec3, 4> pddot{
+      {a1.a - gravity, a2.a - gravity, n1.A * t1.local - L0 * c.eDdot, n2.A * t2.local - L0 * c.eDdot}};
+  const Mat3 A[2] = {n1.A, n2.A};
+  const Vec3 d[2] = {t1.d, t2.d};
+  return mapTranspose(shapeTimes(mass, pddot), L0, c, A, d);
 }
 
 ConsistentInertia consistentInertia(const CorotationalBeam& beam, double mass, const NodePose& n1,
                                     const NodeVelocity& v1, const NodeAcceleration& a1, const NodePose& n2,
                                     const NodeVelocity& v2, const NodeAcceleration& a2, const Vec3& gravity) {
   const double L0 = beam.L0;
-  const NodeTerms t[2] = {nodeTerms(beam.C1, L0, n1, v1, a1), nodeTerms(beam.C2, L0, n2, v2, a2)};
-  const NodePose* pose[2] = {&n1, &n2};
+  const Chord c = chord(n1, v1, a1, n2, v2, a2);
+  const NodeTerms t[2] = {nodeTerms(beam.C1, L0, v1, a1), nodeTerms(beam.C2, L0, v2, a2)};
+  const Mat3 A[2] = {n1.A, n2.A};
+  const Vec3 d[2] = {t[0].d, t[1].d};
   const NodeVelocity* vel[2] = {&v1, &v2};
-  const std::array<Vec3, 4> F = pForces(mass, a1.a, t[0].sddot, a2.a, t[1].sddot, gravity);
+  const std::array<Vec3, 4> pddot{
+      {a1.a - gravity, a2.a - gravity, n1.A * t[0].local - L0 * c.eDdot, n2.A * t[1].local - L0 * c.eDdot}};
+  const std::array<Vec3, 4> F = shapeTimes(mass, pddot);
   ConsistentInertia out;
-  out.f = generalized(F, L0, n1, t[0].d, n2, t[1].d);
+  out.f = mapTranspose(F, L0, c, A, d);
 
-  // Per node: W = d sdot / d omega = -L0 A skew(d); V = d sddot / d omega
-  // = L0 A (omega d^T + (omega . d) I - 2 d omega^T); Q = d sddot / d theta
-  // = -A skew(b) (the node turning under its own slope's acceleration).
-  Mat3 W[2], V[2], Q[2];
+  // Derivatives of eddot (chord.cpp's formula) with respect to cddot, cdot
+  // and c, with D_edot = d edot / dc = -(ldot P / l + e edot^T + edot e^T) / l.
+  const double l = c.l;
+  const Mat3 dEdot = -(c.lDot / l * c.P + c.e * c.eDot.transpose() + c.eDot * c.e.transpose()) / l;
+  const Mat3 eddotByCddot = c.P / l;
+  const Mat3 eddotByCdot = -2.0 * (c.lDot / l * c.P + c.eDot * c.e.transpose() + c.e * c.eDot.transpose()) / l;
+  const Mat3 eddotByC =
+      -(c.e.dot(c.cddot) * c.P + c.e * (c.P * c.cddot).transpose() + c.P * c.cddot * c.e.transpose()) / (l * l) -
+      2.0 * (c.lDot / l * dEdot + c.eDot * c.eDot.transpose() / l - c.lDot / (l * l) * c.eDot * c.e.transpose()) -
+      (c.s / (l * l) * c.P + c.e * (c.cdot.transpose() * dEdot) / l - c.s / (l * l) * c.e * c.e.transpose());
+
+  // pddot's Jacobians, 4 blocks of 3 x 12 over [r1; theta1; r2; theta2]
+  // (b_i = L0 (A_i d_i - e): its chord part is the same in both bubbles).
+  std::array<Mat3x12, 4> Ja, Jv, Jq;
+  for (auto* J : {&Ja, &Jv, &Jq})
+    for (Mat3x12& b : *J) b.setZero();
+  Ja[0].block<3, 3>(0, 0) = Mat3::Identity();
+  Ja[1].block<3, 3>(0, 6) = Mat3::Identity();
   for (int i = 0; i < 2; ++i) {
-    const Mat3& A = pose[i]->A;
-    const Vec3& d = t[i].d;
+    Mat3x12& a = Ja[2 + i];
+    Mat3x12& v = Jv[2 + i];
+    Mat3x12& q = Jq[2 + i];
     const Vec3& w = vel[i]->omega;
-    W[i] = -L0 * A * skew(d);
-    V[i] = L0 * A * (w * d.transpose() + w.dot(d) * Mat3::Identity() - 2.0 * d * w.transpose());
-    Q[i] = -A * skew(t[i].b);
+    // -L0 eddot with c = r2 - r1: + on r1's columns, - on r2's.
+    a.block<3, 3>(0, 0) = L0 * eddotByCddot;
+    a.block<3, 3>(0, 6) = -L0 * eddotByCddot;
+    v.block<3, 3>(0, 0) = L0 * eddotByCdot;
+    v.block<3, 3>(0, 6) = -L0 * eddotByCdot;
+    q.block<3, 3>(0, 0) = L0 * eddotByC;
+    q.block<3, 3>(0, 6) = -L0 * eddotByC;
+    // L0 A (omegadot x d + omega x (omega x d)): W on omegadot, V on omega,
+    // and -A skew(local) as the node turns.
+    a.block<3, 3>(0, 3 + 6 * i) = -L0 * A[i] * skew(d[i]);
+    v.block<3, 3>(0, 3 + 6 * i) =
+        L0 * A[i] * (w * d[i].transpose() + w.dot(d[i]) * Mat3::Identity() - 2.0 * d[i] * w.transpose());
+    q.block<3, 3>(0, 3 + 6 * i) = -A[i] * skew(t[i].local);
   }
-  const double m = mass / 420.0;
-  for (int i = 0; i < 2; ++i) {
-    const int ri = 6 * i, ti = 6 * i + 3;
-    for (int j = 0; j < 2; ++j) {
-      const int rj = 6 * j, tj = 6 * j + 3;
-      const double rr = m * kHermite[2 * i][2 * j], rs = m * kHermite[2 * i][2 * j + 1];
-      const double sr = m * kHermite[2 * i + 1][2 * j], ss = m * kHermite[2 * i + 1][2 * j + 1];
-      out.M.block<3, 3>(ri, rj) = rr * Mat3::Identity();
-      out.M.block<3, 3>(ri, tj) = rs * W[j];
-      out.M.block<3, 3>(ti, rj) = sr * W[i].transpose();
-      out.M.block<3, 3>(ti, tj) = ss * W[i].transpose() * W[j];
-      out.C.block<3, 3>(ri, tj) = rs * V[j];
-      out.C.block<3, 3>(ti, tj) = ss * W[i].transpose() * V[j];
-      out.K.block<3, 3>(ri, tj) = rs * Q[j];
-      out.K.block<3, 3>(ti, tj) = ss * W[i].transpose() * Q[j];
-    }
-    // W^T itself turns with the node: d(L0 d x (A^T F_s))/dtheta.
-    out.K.block<3, 3>(ti, ti) += L0 * skew(t[i].d) * skew(pose[i]->A.transpose() * F[2 * i + 1]);
-  }
+  out.M = mapTranspose(shapeTimes(mass, Ja), L0, c, A, d);
+  out.C = mapTranspose(shapeTimes(mass, Jv), L0, c, A, d);
+  out.K = mapTranspose(shapeTimes(mass, Jq), L0, c, A, d);
+  // The map itself turns: k = (L0 / l) P G (G = G1 + G2) with the chord,
+  // d(P G / l)/dc = -((e . G) P + e G^T P + P G e^T) / l^2; and
+  // L0 d_i x (A_i^T G_i) with node i.
+  const Vec3 G = F[2] + F[3];
+  const Mat3 dk = -L0 * (c.e.dot(G) * c.P + c.e * (c.P * G).transpose() + c.P * G * c.e.transpose()) / (l * l);
+  out.K.block<3, 3>(0, 0) -= dk;
+  out.K.block<3, 3>(0, 6) += dk;
+  out.K.block<3, 3>(6, 0) += dk;
+  out.K.block<3, 3>(6, 6) -= dk;
+  for (int i = 0; i < 2; ++i)
+    out.K.block<3, 3>(3 + 6 * i, 3 + 6 * i) += L0 * skew(d[i]) * skew(A[i].transpose() * F[2 + i]);
   return out;
 }
 
@@ -103,12 +160,15 @@ ConsistentEnergy consistentEnergy(const CorotationalBeam& beam, double mass, con
                                   const Vec3& gravity) {
   const double L0 = beam.L0;
   const Vec3 d1 = beam.C1.col(0), d2 = beam.C2.col(0);
-  const std::array<Vec3, 4> pdot{{v1.v, L0 * (n1.A * v1.omega.cross(d1)), v2.v, L0 * (n2.A * v2.omega.cross(d2))}};
+  const Chord c = chord(n1, v1, {}, n2, v2, {});
+  const std::array<Vec3, 4> pdot{{v1.v, v2.v, L0 * (n1.A * v1.omega.cross(d1) - c.eDot),
+                                  L0 * (n2.A * v2.omega.cross(d2) - c.eDot)}};
   ConsistentEnergy e;
   for (int k = 0; k < 4; ++k)
-    for (int l = 0; l < 4; ++l) e.kinetic += 0.5 * mass / 420.0 * kHermite[k][l] * pdot[k].dot(pdot[l]);
-  const Vec3 s1 = L0 * (n1.A * d1), s2 = L0 * (n2.A * d2);
-  e.gravity = -mass * gravity.dot(0.5 * (n1.r + n2.r) + (s1 - s2) / 12.0);
+    for (int m = 0; m < 4; ++m) e.kinetic += 0.5 * mass / 420.0 * kShape[k][m] * pdot[k].dot(pdot[m]);
+  // int r = (r1 + r2) / 2 + (b1 - b2) / 12, b_i = L0 (A_i d_i - e)
+  const Vec3 b1 = L0 * (n1.A * d1 - c.e), b2 = L0 * (n2.A * d2 - c.e);
+  e.gravity = -mass * gravity.dot(0.5 * (n1.r + n2.r) + (b1 - b2) / 12.0);
   return e;
 }
 

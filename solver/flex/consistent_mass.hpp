@@ -1,31 +1,32 @@
 // Consistent mass of a beam element's centre line (DESIGN.md 3 "Flexible
-// bodies"): the cubic Hermite interpolation of the Euler-Bernoulli element,
-// written in world quantities so that it holds at any rotation.
+// bodies"): the interpolation of the classic beam element, linear along the
+// element and cubic (Hermite) across it, written in world quantities so that
+// it holds at any rotation.
 //
-// The centre line between the nodes is interpolated from the nodes'
-// positions and the element's tangent as each node carries it,
-//   r(xi) = N1 r1 + N2 s1 + N3 r2 + N4 s2,   s_i = L0 A_i d_i,   xi in [0, 1],
-//   N1 = 1 - 3 xi^2 + 2 xi^3, N2 = xi - 2 xi^2 + xi^3,
-//   N3 = 3 xi^2 - 2 xi^3,     N4 = xi^3 - xi^2,
-// with d_i = C_i e1, the element axis in node i's frame (so the reference
-// line is straight). For small deflections of a straight beam the slopes
-// s_i / L0 are the nodal rotations: the classic consistent mass of Archer
-// (1963), rhoA L0 / 420 [156 22 54 -13; 22 4 13 -3; 54 13 156 -22;
-// -13 -3 -22 4] on [r1; s1; r2; s2], whose bending frequencies converge at
-// fourth order in the element size (the linear interpolation of the centre
-// line, which it replaces, converges at second order).
+// Between the nodes the centre line is the chord plus two bubbles,
+//   r(xi) = (1 - xi) r1 + xi r2 + N2 b1 + N4 b2,   xi in [0, 1],
+//   b_i = L0 (A_i d_i - e),   N2 = xi - 2 xi^2 + xi^3,   N4 = xi^3 - xi^2,
+// with d_i = C_i e1 the element axis in node i's frame and e the chord's
+// direction: b_i is the node's slope relative to the chord (its rotation
+// from the chord times L0 for small ones), and has no component along the
+// chord to first order, so the axial motion is the linear bar's (whose
+// Galerkin load the nodes then carry exactly) and the transverse motion is
+// the Hermite cubic's. For small deflections of a straight beam this is the
+// consistent mass of the Euler-Bernoulli element (Archer 1963), whose
+// bending frequencies converge at fourth order in the element size.
 //
-// The kinetic energy T = 1/2 int rhoA |rdot|^2 = 1/2 pdot^T M_p pdot with
-// p = [r1; s1; r2; s2] and M_p constant, and pdot = W [v1; omega1; v2; omega2]
-// with sdot_i = -L0 A_i skew(d_i) omega_i. d'Alembert's principle on the
-// virtual displacements W dq gives the element's generalized inertia force
-//   f = W^T M_p (pddot - g_p),   pddot = W [a; omegadot] + Wdot [v; omega],
-//   sddot_i = L0 A_i (omegadot_i x d_i + omega_i x (omega_i x d_i)),
-// g_p = [g; 0; g; 0] (the weight: M_p g_p = int rhoA N g, as N1 + N3 = 1),
-// so energy is conserved exactly by the semi-discrete equations: no
-// configuration-dependent mass approximations. f is ordered like an element
-// force, [f1 (world); m1 (node-1 frame); f2; m2]. The rotary inertia of the
-// section stays lumped at the nodes (lumpedNodalInertia).
+// With p = [r1; r2; b1; b2] the kinetic energy is T = 1/2 pdot^T M_p pdot,
+// M_p = rhoA L0 / 420 [140 70 21 -14; 70 140 14 -21; 21 14 4 -3;
+// -14 -21 -3 4] (x I3), constant; p depends on the nodes through
+// dp = J dq: db_i = L0 A_i (dtheta_i x d_i) - (L0 / l) P (dr2 - dr1),
+// P = I - e e^T, l the chord length. d'Alembert's principle on the virtual
+// displacements J dq gives the element's generalized inertia force
+//   f = J^T M_p (pddot - g_p),   g_p = [g; g; 0; 0]
+// (M_p g_p = int rhoA N g: the weight as the consistent load), exactly
+// conservative: no approximation of a configuration-dependent mass.
+// f is ordered like an element force, [f1 (world); m1 (node-1 frame); f2;
+// m2]. The rotary inertia of the section stays lumped at the nodes
+// (lumpedNodalInertia).
 #pragma once
 #include "flex/corotational_beam.hpp"
 
@@ -42,7 +43,7 @@ struct ConsistentInertia {
 
 // f alone (residual evaluations); without inertia (statics) pass zero
 // velocities and accelerations: f is then minus the consistent weight,
-// nodal forces rhoA L0 g / 2 and moments rhoA L0^2 / 12 about the axis.
+// nodal forces rhoA L0 g / 2 and moments rhoA L0^2 g / 12 about the axis.
 Vec12 consistentInertiaForce(const CorotationalBeam& beam, double mass, const NodePose& n1, const NodeVelocity& v1,
                              const NodeAcceleration& a1, const NodePose& n2, const NodeVelocity& v2,
                              const NodeAcceleration& a2, const Vec3& gravity);
@@ -52,7 +53,7 @@ ConsistentInertia consistentInertia(const CorotationalBeam& beam, double mass, c
                                     const NodeVelocity& v2, const NodeAcceleration& a2, const Vec3& gravity);
 
 // Kinetic energy 1/2 pdot^T M_p pdot and the weight's potential
-// -rhoA L0 g . (r1 / 2 + s1 / 12 + r2 / 2 - s2 / 12) of the centre line.
+// -rhoA L0 g . (r1 / 2 + r2 / 2 + b1 / 12 - b2 / 12) of the centre line.
 struct ConsistentEnergy {
   double kinetic = 0.0, gravity = 0.0;
 };

@@ -122,7 +122,8 @@ struct NodalLoadSpec {
 };
 
 // Translational inertia of a flexible body's elements: the consistent mass
-// of the cubic (Hermite) centre line (flex/consistent_mass.hpp), or half of
+// of the centre line, linear along the chord and cubic across it
+// (flex/consistent_mass.hpp), or half of
 // each element lumped at its nodes. The rotary inertia of the section is
 // lumped at the nodes either way.
 enum class BeamMass { Consistent, Lumped };
