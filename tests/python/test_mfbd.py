@@ -46,7 +46,7 @@ def tip_body_frequencies(tmp_path, n):
 
 
 def test_tip_body_on_a_fixed_joint_has_the_tip_mass_frequency(tmp_path):
-    # The consistent (cubic centre-line) mass and the shallow-arch element
+    # The consistent mass (cubic across the element) and the shallow-arch element
     # converge at fourth order: f1 +1.5e-5 at 2 elements, -1.3e-6 at 4
     # (the time step's -2.5e-6 below that); f2 8.5e-3 and 4.0e-4.
     e2, v2 = tip_body_frequencies(tmp_path, 2)
