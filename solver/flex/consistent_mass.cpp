@@ -73,22 +73,33 @@ Eigen::Matrix<double, 12, Block::ColsAtCompileTime> mapTranspose(const std::arra
 
 }  // namespace
 
+// The same f as consistentInertia's, with vector operations only (the
+// residual evaluates it for every element in every Newton iteration).
 Vec12 consistentInertiaForce(const CorotationalBeam& beam, double mass, const NodePose& n1, const NodeVelocity& v1,
                              const NodeAcceleration& a1, const NodePose& n2, const NodeVelocity& v2,
                              const NodeAcceleration& a2, const Vec3& gravity) {
   const double L0 = beam.L0;
-  const Chord c = chord(n1, v1, a1, n2, v2, a2);
+  const Vec3 x = n2.r - n1.r;
+  const double l = x.norm();
+  const Vec3 e = x / l, cdot = v2.v - v1.v, cddot = a2.a - a1.a;
+  const double lDot = e.dot(cdot);
+  const Vec3 eDot = (cdot - lDot * e) / l;
+  const Vec3 eDdot = (cddot - e.dot(cddot) * e - 2.0 * lDot * eDot - eDot.dot(cdot) * e) / l;
   const NodeTerms t1 = nodeTerms(beam.C1, L0, v1, a1), t2 = nodeTerms(beam.C2, L0, v2, a2);
-  const std::array<Vec3, 4> pddot{
-      {a1.a - gravity, a2.a - gravity, n1.A * t1.local - L0 * c.eDdot, n2.A * t2.local - L0 * c.eDdot}};
-  const Mat3 A[2] = {n1.A, n2.A};
-  const Vec3 d[2] = {t1.d, t2.d};
-  return mapTranspose(shapeTimes(mass, pddot), L0, c, A, d);
+  const std::array<Vec3, 4> F = shapeTimes(mass, std::array<Vec3, 4>{{a1.a - gravity, a2.a - gravity,
+                                                                      n1.A * t1.local - L0 * eDdot,
+                                                                      n2.A * t2.local - L0 * eDdot}});
+  const Vec3 G = F[2] + F[3];
+  const Vec3 k = (L0 / l) * (G - e.dot(G) * e);
+  Vec12 f;
+  f << F[0] + k, L0 * t1.d.cross(n1.A.transpose() * F[2]), F[1] - k, L0 * t2.d.cross(n2.A.transpose() * F[3]);
+  return f;
 }
 
 ConsistentInertia consistentInertia(const CorotationalBeam& beam, double mass, const NodePose& n1,
                                     const NodeVelocity& v1, const NodeAcceleration& a1, const NodePose& n2,
-                                    const NodeVelocity& v2, const NodeAcceleration& a2, const Vec3& gravity) {
+                                    const NodeVelocity& v2, const NodeAcceleration& a2, const Vec3& gravity,
+                                    double cM, double cC, double cK) {
   const double L0 = beam.L0;
   const Chord c = chord(n1, v1, a1, n2, v2, a2);
   const NodeTerms t[2] = {nodeTerms(beam.C1, L0, v1, a1), nodeTerms(beam.C2, L0, v2, a2)};
@@ -101,7 +112,7 @@ ConsistentInertia consistentInertia(const CorotationalBeam& beam, double mass, c
   ConsistentInertia out;
   out.f = mapTranspose(F, L0, c, A, d);
 
-  // Derivatives of eddot (chord.cpp's formula) with respect to cddot, cdot
+  // Derivatives of eddot (Chord's formula) with respect to cddot, cdot
   // and c, with D_edot = d edot / dc = -(ldot P / l + e edot^T + edot e^T) / l.
   const double l = c.l;
   const Mat3 dEdot = -(c.lDot / l * c.P + c.e * c.eDot.transpose() + c.eDot * c.e.transpose()) / l;
@@ -112,46 +123,42 @@ ConsistentInertia consistentInertia(const CorotationalBeam& beam, double mass, c
       2.0 * (c.lDot / l * dEdot + c.eDot * c.eDot.transpose() / l - c.lDot / (l * l) * c.eDot * c.e.transpose()) -
       (c.s / (l * l) * c.P + c.e * (c.cdot.transpose() * dEdot) / l - c.s / (l * l) * c.e * c.e.transpose());
 
-  // pddot's Jacobians, 4 blocks of 3 x 12 over [r1; theta1; r2; theta2]
-  // (b_i = L0 (A_i d_i - e): its chord part is the same in both bubbles).
-  std::array<Mat3x12, 4> Ja, Jv, Jq;
-  for (auto* J : {&Ja, &Jv, &Jq})
-    for (Mat3x12& b : *J) b.setZero();
-  Ja[0].block<3, 3>(0, 0) = Mat3::Identity();
-  Ja[1].block<3, 3>(0, 6) = Mat3::Identity();
+  // cM d/d[a; omegadot] + cC d/d[v; omega] + cK d/d[dr; dtheta] of pddot,
+  // 4 blocks of 3 x 12 over [r1; theta1; r2; theta2] (b_i = L0 (A_i d_i - e):
+  // its chord part is the same in both bubbles). J^T M_p J of it is the
+  // tangent, less the map's own turning (added below).
+  std::array<Mat3x12, 4> J;
+  for (Mat3x12& b : J) b.setZero();
+  J[0].block<3, 3>(0, 0) = cM * Mat3::Identity();
+  J[1].block<3, 3>(0, 6) = cM * Mat3::Identity();
+  // -L0 eddot with c = r2 - r1: + on r1's columns, - on r2's.
+  const Mat3 byChord = L0 * (cM * eddotByCddot + cC * eddotByCdot + cK * eddotByC);
   for (int i = 0; i < 2; ++i) {
-    Mat3x12& a = Ja[2 + i];
-    Mat3x12& v = Jv[2 + i];
-    Mat3x12& q = Jq[2 + i];
+    Mat3x12& b = J[2 + i];
     const Vec3& w = vel[i]->omega;
-    // -L0 eddot with c = r2 - r1: + on r1's columns, - on r2's.
-    a.block<3, 3>(0, 0) = L0 * eddotByCddot;
-    a.block<3, 3>(0, 6) = -L0 * eddotByCddot;
-    v.block<3, 3>(0, 0) = L0 * eddotByCdot;
-    v.block<3, 3>(0, 6) = -L0 * eddotByCdot;
-    q.block<3, 3>(0, 0) = L0 * eddotByC;
-    q.block<3, 3>(0, 6) = -L0 * eddotByC;
+    b.block<3, 3>(0, 0) = byChord;
+    b.block<3, 3>(0, 6) = -byChord;
     // L0 A (omegadot x d + omega x (omega x d)): W on omegadot, V on omega,
     // and -A skew(local) as the node turns.
-    a.block<3, 3>(0, 3 + 6 * i) = -L0 * A[i] * skew(d[i]);
-    v.block<3, 3>(0, 3 + 6 * i) =
-        L0 * A[i] * (w * d[i].transpose() + w.dot(d[i]) * Mat3::Identity() - 2.0 * d[i] * w.transpose());
-    q.block<3, 3>(0, 3 + 6 * i) = -A[i] * skew(t[i].local);
+    b.block<3, 3>(0, 3 + 6 * i) =
+        A[i] * (-cM * L0 * skew(d[i]) +
+                cC * L0 * (w * d[i].transpose() + w.dot(d[i]) * Mat3::Identity() - 2.0 * d[i] * w.transpose()) -
+                cK * skew(t[i].local));
   }
-  out.M = mapTranspose(shapeTimes(mass, Ja), L0, c, A, d);
-  out.C = mapTranspose(shapeTimes(mass, Jv), L0, c, A, d);
-  out.K = mapTranspose(shapeTimes(mass, Jq), L0, c, A, d);
+  out.S = mapTranspose(shapeTimes(mass, J), L0, c, A, d);
   // The map itself turns: k = (L0 / l) P G (G = G1 + G2) with the chord,
   // d(P G / l)/dc = -((e . G) P + e G^T P + P G e^T) / l^2; and
   // L0 d_i x (A_i^T G_i) with node i.
   const Vec3 G = F[2] + F[3];
-  const Mat3 dk = -L0 * (c.e.dot(G) * c.P + c.e * (c.P * G).transpose() + c.P * G * c.e.transpose()) / (l * l);
-  out.K.block<3, 3>(0, 0) -= dk;
-  out.K.block<3, 3>(0, 6) += dk;
-  out.K.block<3, 3>(6, 0) += dk;
-  out.K.block<3, 3>(6, 6) -= dk;
+  if (cK == 0.0) return out;
+  const Mat3 dk =
+      -cK * L0 * (c.e.dot(G) * c.P + c.e * (c.P * G).transpose() + c.P * G * c.e.transpose()) / (l * l);
+  out.S.block<3, 3>(0, 0) -= dk;
+  out.S.block<3, 3>(0, 6) += dk;
+  out.S.block<3, 3>(6, 0) += dk;
+  out.S.block<3, 3>(6, 6) -= dk;
   for (int i = 0; i < 2; ++i)
-    out.K.block<3, 3>(3 + 6 * i, 3 + 6 * i) += L0 * skew(d[i]) * skew(A[i].transpose() * F[2 + i]);
+    out.S.block<3, 3>(3 + 6 * i, 3 + 6 * i) += cK * L0 * skew(d[i]) * skew(A[i].transpose() * F[2 + i]);
   return out;
 }
 

@@ -32,13 +32,13 @@
 
 namespace mfbd {
 
-// The element's inertia minus weight f and its derivatives with respect to
-// [a; omegadot] (M), [v; omega] (C) and the increments [dr; dtheta] (K),
-// with the velocities and accelerations held (nodal_inertia.hpp's
-// conventions). `mass` = rhoA L0.
+// The element's inertia minus weight f and its tangent
+//   S = cM df/d[a; omegadot] + cC df/d[v; omega] + cK df/d[dr; dtheta]
+// (velocities and accelerations held; nodal_inertia.hpp's conventions),
+// formed at once for the Newton matrix's factors. `mass` = rhoA L0.
 struct ConsistentInertia {
   Vec12 f = Vec12::Zero();
-  Mat12 M = Mat12::Zero(), C = Mat12::Zero(), K = Mat12::Zero();
+  Mat12 S = Mat12::Zero();
 };
 
 // f alone (residual evaluations); without inertia (statics) pass zero
@@ -50,7 +50,8 @@ Vec12 consistentInertiaForce(const CorotationalBeam& beam, double mass, const No
 
 ConsistentInertia consistentInertia(const CorotationalBeam& beam, double mass, const NodePose& n1,
                                     const NodeVelocity& v1, const NodeAcceleration& a1, const NodePose& n2,
-                                    const NodeVelocity& v2, const NodeAcceleration& a2, const Vec3& gravity);
+                                    const NodeVelocity& v2, const NodeAcceleration& a2, const Vec3& gravity,
+                                    double cM, double cC, double cK);
 
 // Kinetic energy 1/2 pdot^T M_p pdot and the weight's potential
 // -rhoA L0 g . (r1 / 2 + r2 / 2 + b1 / 12 - b2 / 12) of the centre line.

@@ -166,11 +166,10 @@ void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nod
       S = cK * f.K + cC * f.C;
     }
     if (e.mass > 0.0) {
-      const ConsistentInertia in =
-          withInertia ? consistentInertia(e.beam, e.mass, s1.pose, s1.velocity, s1.acceleration, s2.pose,
-                                          s2.velocity, s2.acceleration, gravity)
-                      : consistentInertia(e.beam, e.mass, s1.pose, {}, {}, s2.pose, {}, {}, gravity);
-      S += cM * in.M + cC * in.C + cK * in.K;  // statics: the consistent weight's K alone
+      // Statics: the consistent weight's K alone (cM = cC = 0).
+      S += withInertia ? consistentInertia(e.beam, e.mass, s1.pose, s1.velocity, s1.acceleration, s2.pose,
+                                           s2.velocity, s2.acceleration, gravity, cM, cC, cK).S
+                       : consistentInertia(e.beam, e.mass, s1.pose, {}, {}, s2.pose, {}, {}, gravity, 0.0, 0.0, cK).S;
     }
     const FlexNode &a = mesh.nodes[e.node1], &b = mesh.nodes[e.node2];
     const bool freeA = isFree(a), freeB = isFree(b);

@@ -205,6 +205,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     const double floor = std::max({0.01 * options_.tolerance, coordinateFloor, 4.0 * correctionNoise_});
     const bool small = size <= floor || remaining <= options_.tolerance;
     if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= std::max(options_.tolerance, phiFloor))) {
+      lastIterations_ = k + 1;
       trial.substeps = s.substeps + 1;
       trial.newtonIterations = s.newtonIterations;
       trial.factorizations = s.factorizations;

@@ -26,9 +26,16 @@ class GeneralizedAlpha : public TimeStepper {
 
  protected:
   bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why) override;
-  // A fresh iteration matrix at every communication point: a run restored
-  // from a saved state then replays the original bit for bit.
-  void beginAdvance() override { factoredStep_ = 0.0; }
+  // At a communication point the inputs may have jumped: a fresh iteration
+  // matrix, unless the last substep converged in the least a substep takes
+  // (two corrections) with the matrix it had, which then still serves (the
+  // rule depends on the run alone, so a run replays bit for bit). Kept, it
+  // saves a tangent and a factorization per communication step: on the
+  // flexible cantilever with 10 substeps per step 0.6 of 2.1 us per
+  // element-step.
+  void beginAdvance() override {
+    if (lastIterations_ > 2) factoredStep_ = 0.0;
+  }
 
  private:
   bool factorize(Dynamics& system, const IntegratorState& trial, double h);
@@ -43,6 +50,7 @@ class GeneralizedAlpha : public TimeStepper {
   LinearSolver solver_;
   double factoredStep_ = 0.0;  // substep size of the current factorization; 0 = none
   double correctionNoise_ = 0.0;  // of the current factorization (constraintNoise)
+  int lastIterations_ = 1 << 30;  // Newton iterations of the last accepted substep (none yet: many)
 };
 
 }  // namespace mfbd

@@ -173,7 +173,10 @@ TEST(ConsistentMass, TangentsMatchFiniteDifferences) {
     NodeAcceleration a[2] = {{vec(5.0), vec(5.0)}, {vec(5.0), vec(5.0)}};
     const Vec3 g(0.3, -9.81, 1.2);
     const double m = 1.7;
-    const ConsistentInertia in = consistentInertia(beam, m, n[0], v[0], a[0], n[1], v[1], a[1], g);
+    auto tangent = [&](double cM, double cC, double cK) {
+      return consistentInertia(beam, m, n[0], v[0], a[0], n[1], v[1], a[1], g, cM, cC, cK);
+    };
+    const ConsistentInertia in = tangent(1.0, 0.0, 0.0);
     auto force = [&] { return consistentInertiaForce(beam, m, n[0], v[0], a[0], n[1], v[1], a[1], g); };
     EXPECT_LT((in.f - force()).norm(), 1e-13 * in.f.norm());
     Mat12 fd[3];
@@ -201,10 +204,15 @@ TEST(ConsistentMass, TangentsMatchFiniteDifferences) {
         fd[block].col(col) = (plus - minus) / (2 * h);
       }
     }
-    const Mat12* analytic[3] = {&in.M, &in.C, &in.K};
+    const Mat12 analytic[3] = {in.S, tangent(0.0, 1.0, 0.0).S, tangent(0.0, 0.0, 1.0).S};
     for (int block = 0; block < 3; ++block)
-      worst[block] = std::max(worst[block], (*analytic[block] - fd[block]).cwiseAbs().maxCoeff() /
+      worst[block] = std::max(worst[block], (analytic[block] - fd[block]).cwiseAbs().maxCoeff() /
                                                 fd[block].cwiseAbs().maxCoeff());
+    // The factors combine linearly.
+    EXPECT_LT((tangent(0.3, 2.0, 7.0).S - (0.3 * analytic[0] + 2.0 * analytic[1] + 7.0 * analytic[2]))
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-12 * analytic[2].cwiseAbs().maxCoeff() * 7.0);
   }
   std::printf("[ consistent mass ] max rel error M: %.2e, C: %.2e, K: %.2e\n", worst[0], worst[1], worst[2]);
   EXPECT_LT(worst[0], 1e-8);
