@@ -133,16 +133,18 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
   const double gammaPrime = gamma_ / (beta_ * h);
   const double aPerVdot = (1.0 - alphaF_) / (1.0 - alphaM_);
 
-  // Predictor with vdot_{n+1} = vdot_n.
-  IntegratorState trial = s;
+  // Predictor with vdot_{n+1} = vdot_n. (The trial state and the vectors
+  // of the iteration are members: assigned, not allocated, every substep.)
+  IntegratorState& trial = trial_;
+  trial = s;
   trial.t = s.t + h;
   trial.a = (s.vdot - alphaM_ * s.a) / (1.0 - alphaM_);
   trial.v = s.v + h * (1.0 - gamma_) * s.a + h * gamma_ * trial.a;
-  VectorXd hDeltaQ = h * s.v + h * h * (0.5 - beta_) * s.a + h * h * beta_ * trial.a;
-  trial.q = s.q;
+  VectorXd& hDeltaQ = hDeltaQ_;
+  hDeltaQ = h * s.v + h * h * (0.5 - beta_) * s.a + h * h * beta_ * trial.a;
   system.retract(trial.q, hDeltaQ);
 
-  VectorXd r, phi, rhs;
+  VectorXd &r = r_, &phi = phi_, &rhs = rhs_, &delta = delta_;
   double previous = 0.0;
   // Corrections computed with the current factorization, if it was made in
   // this substep (-1: an earlier substep's matrix).
@@ -174,7 +176,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     rhs.setZero(assembledIterationMatrix().rows());
     rhs.head(n) = -r / betaPrime;
     rhs.segment(n, m) = -phi;
-    const VectorXd delta = solver_.solve(rhs);
+    solver_.solve(rhs, delta);
     ++s.newtonIterations;
     if (withFreshMatrix >= 0) ++withFreshMatrix;
     const double size = delta.head(n).cwiseAbs().maxCoeff();
@@ -210,7 +212,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
       trial.newtonIterations = s.newtonIterations;
       trial.factorizations = s.factorizations;
       trial.rejectedSubsteps = s.rejectedSubsteps;
-      s = std::move(trial);
+      std::swap(s, trial);  // trial keeps s's buffers for the next substep
       return true;
     }
     // Modified Newton: a stale iteration matrix is refreshed when the

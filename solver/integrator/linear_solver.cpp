@@ -184,9 +184,18 @@ LinearSolver::Status LinearSolver::factorize(const SparseMatrix& A) {
 }
 
 Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) const {
-  if (impl_->sparse && impl_->ordered) return impl_->columns.transpose() * impl_->klu->solve(impl_->rows * b);
-  if (impl_->sparse) return impl_->klu->solve(b);
-  return impl_->dense.solve(b);
+  Eigen::VectorXd x;
+  solve(b, x);
+  return x;
+}
+
+void LinearSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+  if (impl_->sparse && impl_->ordered)
+    x = impl_->columns.transpose() * impl_->klu->solve(impl_->rows * b);
+  else if (impl_->sparse)
+    x = impl_->klu->solve(b);
+  else
+    x = impl_->dense.solve(b);
 }
 
 }  // namespace mfbd

@@ -49,6 +49,8 @@ class LinearSolver {
   void analyzePattern(const SparseMatrix& A, const std::vector<std::pair<int, int>>& pivotOrder = {});
   Status factorize(const SparseMatrix& A);
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const;
+  // The same into x (its storage reused when it has the size).
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
   bool usesSparse() const;
 
  private:
