@@ -353,6 +353,19 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
   }
 }
 
+// The rigid tree's joint-space tangent differentiates its residual over
+// every rate (n + 1 evaluations); the recursive form's costs a few. A beam
+// element's tangent costs about 16 of its residuals (internal force and
+// consistent inertia with their tangents, 5.9 us, against 0.37 us:
+// benchmarks/flexible_phases.cpp), so a mesh's tangent about 16 of the
+// mesh's residuals. The larger part is taken for the whole.
+double System::tangentCost() const {
+  double rigid = 0.0;
+  if (!model_.bodies.empty()) rigid = recursiveMatrix_ ? 3.0 : double(model_.rigidVelocityCount + 1);
+  const double flexible = model_.flexible.elements.empty() ? 0.0 : 16.0;
+  return std::max({1.0, rigid, flexible});
+}
+
 // The recursive formulation's own Newton matrix, sparse and O(n) for a tree
 // of n bodies where the joint-space B^T M B is dense (a chain). Besides the
 // joint-rate corrections x it carries, per body, the variations y of its

@@ -53,6 +53,7 @@ class System : public Dynamics {
   // the Newton matrix takes): for assembly and the constraints' rank.
   void constraintJacobian(double t, const Configuration& q, const VectorXd& v, Triplets& jacobian);
   double constraintLengthScale() const override { return constraintLengthScale_; }
+  double tangentCost() const override;
 
   // Force and torque a cut joint passes to its child (child marker frame,
   // about its origin), from the multipliers (after evaluate()).

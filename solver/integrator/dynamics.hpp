@@ -45,6 +45,11 @@ class Dynamics {
   // were computed from: their round-off is a few ulps of it, which no Newton
   // correction can remove (a 40 m long chain of bodies: ~1e-14 m).
   virtual double constraintLengthScale() const { return 1.0; }
+  // What a fresh tangent costs, in residual evaluations: an estimate from
+  // the system's structure (deterministic, unlike a timing), for the
+  // integrator's choice between refreshing the Newton matrix and iterating
+  // longer with the one it has.
+  virtual double tangentCost() const { return 1.0; }
 };
 
 }  // namespace mfbd

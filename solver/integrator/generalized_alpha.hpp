@@ -26,16 +26,20 @@ class GeneralizedAlpha : public TimeStepper {
 
  protected:
   bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why) override;
-  // At a communication point the inputs may have jumped: a fresh iteration
-  // matrix, unless the last substep converged in the least a substep takes
-  // (two corrections) with the matrix it had, which then still serves (the
-  // rule depends on the run alone, so a run replays bit for bit). Kept, it
-  // saves a tangent and a factorization per communication step: on the
-  // flexible cantilever with 10 substeps per step 0.6 of 2.1 us per
-  // element-step.
-  void beginAdvance() override {
-    if (lastIterations_ > 2) factoredStep_ = 0.0;
+  // At a communication point (where inputs may have jumped) a fresh
+  // iteration matrix when it pays: the last substep took k corrections
+  // where a fresh matrix takes two; the k - 2 extra ones (a residual and a
+  // solve each) recur over the next substeps until the matrix is refreshed
+  // anyway, counted as kRefreshHorizon of them, against a tangent of
+  // tangentCost() residuals. A double pendulum (cost 3) then refreshes
+  // whenever k > 2, a beam mesh (16) when k > 6, an 81-joint tree with 40
+  // loops (82) hardly ever. The rule depends on the run alone, so a run
+  // replays bit for bit. (Flexible cantilever, 10 substeps per doStep:
+  // 0.6 of 2.1 us per element-step saved.)
+  void beginAdvance(const Dynamics& system) override {
+    if (kRefreshHorizon * (lastIterations_ - 2) > system.tangentCost()) factoredStep_ = 0.0;
   }
+  static constexpr double kRefreshHorizon = 4.0;
 
  private:
   bool factorize(Dynamics& system, const IntegratorState& trial, double h);
@@ -52,7 +56,7 @@ class GeneralizedAlpha : public TimeStepper {
   double correctionNoise_ = 0.0;  // of the current factorization (constraintNoise)
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
-  int lastIterations_ = 1 << 30;  // Newton iterations of the last accepted substep (none yet: many)
+  double lastIterations_ = 1e9;  // Newton iterations of the last accepted substep (none yet: many)
 };
 
 }  // namespace mfbd

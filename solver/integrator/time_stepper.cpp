@@ -92,7 +92,7 @@ bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const
 
 AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double tEnd) {
   AdvanceResult result;
-  beginAdvance();
+  beginAdvance(system);
   double h = std::min(s.h > 0.0 ? s.h : options_.hMax, options_.hMax);
   int successes = 0;
   while (tEnd - s.t > 1e-12 * std::max(1.0, std::abs(tEnd))) {

@@ -57,7 +57,7 @@ class TimeStepper {
  protected:
   // One substep of size h from s.t; false (with a reason) leaves s unchanged.
   virtual bool substep(Dynamics& system, IntegratorState& s, double h, std::string& why) = 0;
-  virtual void beginAdvance() {}
+  virtual void beginAdvance(const Dynamics& /*system*/) {}
 
   // The Newton matrix [S Phi_q^T; Phi_q -eps I] from the system's tangent
   // (eps = 0 with regularize false), auxiliary unknowns last.
