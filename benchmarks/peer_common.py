@@ -229,7 +229,7 @@ def refinement_grid(pairs, meshes=2):
     and the Pareto front of each shows it at its best."""
     grid = list(pairs)
     for i, (n, _) in enumerate(pairs[:meshes]):
-        grid += [(n, h) for _, h in pairs[i + 1:]]
+        grid += [(n, h) for _, h in pairs[i + 1:] if h < pairs[i][1] and (n, h) not in grid]
     return grid
 
 
