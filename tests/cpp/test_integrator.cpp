@@ -121,6 +121,22 @@ TEST(ConstraintRank, FindsVanishingAndDependentRows) {
   EXPECT_EQ(constraintRank(J).rank, 2);
 }
 
+namespace {
+
+// R2: two 1 m, 1 kg bars from horizontal on revolute joints, rho_inf = 1.
+Scene doublePendulum(double hMax) {
+  Scene scene = parseScene(R"({"format": "mfbd-scene/1", "name": "r2", "gravity": [0, -9.81, 0],
+    "solver": {"rho_inf": 1.0},
+    "bodies": [{"name": "bar1", "mass": 1, "inertia": [0, 0.0833333333333333, 0.0833333333333333], "position": [0.5, 0, 0]},
+               {"name": "bar2", "mass": 1, "inertia": [0, 0.0833333333333333, 0.0833333333333333], "position": [1.5, 0, 0]}],
+    "joints": [{"name": "shoulder", "type": "revolute", "parent": "ground", "child": "bar1", "position": [0, 0, 0]},
+               {"name": "elbow", "type": "revolute", "parent": "bar1", "child": "bar2", "position": [1, 0, 0]}]})");
+  scene.solver.hMax = hMax;
+  return scene;
+}
+
+}  // namespace
+
 TEST(GeneralizedAlpha, LongCommunicationStepsNeitherRejectNorChangeTheAnswer) {
   // R2 double pendulum (two 1 m, 1 kg bars from horizontal), h = 1e-2,
   // rho_inf = 1: with doStep 0.1 s the matrix of a communication point is
@@ -128,13 +144,8 @@ TEST(GeneralizedAlpha, LongCommunicationStepsNeitherRejectNorChangeTheAnswer) {
   // the tolerance rather than fail whole substeps (it rejected 75 of 1075
   // in 10 s before), and land on the motion of doStep 0.01 s (fresh matrix
   // every substep) to the Newton tolerance's accumulation over 3 s.
-  const char* scene = R"({"format": "mfbd-scene/1", "name": "r2", "gravity": [0, -9.81, 0],
-    "solver": {"h_max": 0.01, "rho_inf": 1.0},
-    "bodies": [{"name": "bar1", "mass": 1, "inertia": [0, 0.0833333333333333, 0.0833333333333333], "position": [0.5, 0, 0]},
-               {"name": "bar2", "mass": 1, "inertia": [0, 0.0833333333333333, 0.0833333333333333], "position": [1.5, 0, 0]}],
-    "joints": [{"name": "shoulder", "type": "revolute", "parent": "ground", "child": "bar1", "position": [0, 0, 0]},
-               {"name": "elbow", "type": "revolute", "parent": "bar1", "child": "bar2", "position": [1, 0, 0]}]})";
-  Simulation longSteps(parseScene(scene)), shortSteps(parseScene(scene));
+  const Scene scene = doublePendulum(0.01);
+  Simulation longSteps(scene), shortSteps(scene);
   std::string message;
   ASSERT_TRUE(longSteps.initialize(0.0, message));
   ASSERT_TRUE(shortSteps.initialize(0.0, message));
@@ -172,13 +183,8 @@ TEST(GeneralizedAlpha, IterationMatrixIsKeptAcrossCommunicationPointsWhenItPays)
   EXPECT_EQ(stepped.state().factorizations, 1);
   EXPECT_LT((stepped.state().q.scalars - once.state().q.scalars).cwiseAbs().maxCoeff(), 1e-12);
 
-  const char* pendulum = R"({"format": "mfbd-scene/1", "name": "r2", "gravity": [0, -9.81, 0],
-    "solver": {"h_max": 0.001, "rho_inf": 1.0},
-    "bodies": [{"name": "bar1", "mass": 1, "inertia": [0, 0.0833333333333333, 0.0833333333333333], "position": [0.5, 0, 0]},
-               {"name": "bar2", "mass": 1, "inertia": [0, 0.0833333333333333, 0.0833333333333333], "position": [1.5, 0, 0]}],
-    "joints": [{"name": "shoulder", "type": "revolute", "parent": "ground", "child": "bar1", "position": [0, 0, 0]},
-               {"name": "elbow", "type": "revolute", "parent": "bar1", "child": "bar2", "position": [1, 0, 0]}]})";
-  Simulation swinging(parseScene(pendulum));
+  const Scene pendulum = doublePendulum(1e-3);
+  Simulation swinging(pendulum);
   ASSERT_TRUE(swinging.initialize(0.0, message));
   for (int k = 0; k < 100; ++k) ASSERT_TRUE(swinging.doStep(0.01).ok);
   // Measured 94 of 100: kept only where a communication step's last
@@ -188,7 +194,7 @@ TEST(GeneralizedAlpha, IterationMatrixIsKeptAcrossCommunicationPointsWhenItPays)
   // The beam at h = 1e-2 takes three or four corrections per substep, but
   // its tangent costs 16 residuals (the pendulum's 3): it keeps its matrix
   // over communication points, refreshed only inside substeps that slow.
-  EXPECT_DOUBLE_EQ(System(assemble(parseScene(pendulum))).tangentCost(), 3.0);
+  EXPECT_DOUBLE_EQ(System(assemble(pendulum)).tangentCost(), 3.0);
   EXPECT_DOUBLE_EQ(System(assemble(parseScene(beam))).tangentCost(), 16.0);
   Scene coarse = parseScene(beam);
   coarse.solver.hMax = 1e-2;
