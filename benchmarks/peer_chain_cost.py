@@ -27,14 +27,13 @@ The fitted exponent p of cost ~ n^p over n >= 20 is printed and written. A
 study, not a test: nothing here asserts a time.
 Writes peer_chain_cost.csv and peer_chain_cost.png.
 """
-import argparse
 import csv
-import pathlib
 import time
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
+    save_figure, study_arguments
 
 G, MASS, L = 9.81, 1.0, 1.0  # each bar
 H, STOP, COMMUNICATION, RHO_INF = 1e-3, 0.2, 0.01, 0.8
@@ -104,11 +103,7 @@ def write_rows(path, rows):
 
 
 def plot(rows, path, slopes):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7.5, 5.2))
+    fig, ax = figure(figsize=(7.5, 5.2))
     for label, style in ((OURS, dict(color="C0", marker="o")), (EXUDYN, dict(color="C3", marker="s"))):
         sel = [r for r in rows if r["code"] == label]
         ax.loglog([r["n"] for r in sel], [r["us_per_step"] for r in sel], "-",
@@ -122,18 +117,11 @@ def plot(rows, path, slopes):
     ax.set_title(f"n-body pendulum chain, h = {H:g}, communication step {COMMUNICATION:g} s", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    print(f"wrote {path.resolve()}")
+    save_figure(fig, path)
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--sizes", type=int, nargs="+", default=SIZES)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=3, extra=[("--sizes", dict(type=int, nargs="+", default=SIZES))])
 
     factory = SceneFactory()
     rows = []

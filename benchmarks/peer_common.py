@@ -8,6 +8,7 @@ unzipping and packing are outside). Exudyn: mbs.SolveDynamic / SolveStatic
 (model building and mbs.Assemble are outside). The fastest of a few repeats
 counts, which filters out noise from other processes on the machine.
 """
+import argparse
 import copy
 import csv
 import pathlib
@@ -162,6 +163,29 @@ def exudyn_solve(mbs, settings, static=False):
                       factorizations=int(it.newtonJacobiCount))
 
 
+def study_arguments(doc, repeats, fmu=None, extra=()):
+    """The command line of a peer study: --out (made if missing), --repeats,
+    --fmu when the study runs one packed FMU, and `extra` as (flag, kwargs)."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
+    if fmu is not None:
+        parser.add_argument("--fmu", type=pathlib.Path, default=fmu)
+    parser.add_argument("--repeats", type=int, default=repeats)
+    for flag, kwargs in extra:
+        parser.add_argument(flag, **kwargs)
+    args = parser.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+    return args
+
+
+def figure(ncols=1, figsize=(7.5, 5)):
+    """A figure with ncols axes, drawn without a display."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt.subplots(1, ncols, figsize=figsize)
+
+
 def write_csv(path, rows):
     """rows: list of dicts; columns code, h_or_elements, wall_time_s, error
     first, then every other key in order of first appearance."""
@@ -173,6 +197,7 @@ def write_csv(path, rows):
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in r.items()})
+    print(f"wrote {pathlib.Path(path).resolve()}")
 
 
 def read_csv(path):
@@ -233,6 +258,24 @@ def refinement_grid(pairs, meshes=2):
     return grid
 
 
+def grid_study(label, runs, grid, repeats, measure):
+    """Every (code, model, run) of `runs` at every (n, h) of `grid`, the best
+    of `repeats`: one row per run with the columns every study has and
+    measure(result)'s own (a dict with the error, and a text for the log
+    line)."""
+    rows = []
+    for code, model, run in runs:
+        for n, h in grid:
+            r = best_of(lambda: run(n, h), repeats)
+            columns, text = measure(r)
+            rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"], model=model, h_s=h, **columns,
+                             steps=r["steps"], newton_iterations=r["newton_iterations"],
+                             factorizations=r.get("factorizations", ""), rejected_steps=r.get("rejected_steps", "")))
+            print(f"{label} {code:9s} n={n:4d} h={h:8.2e}  wall {r['wall_time_s']:7.3f} s  {text}  Newton it/step "
+                  f"{r['newton_iterations'] / r['steps']:.2f}", flush=True)
+    return rows
+
+
 def mesh_and_step(row):
     """Annotation of a run over elements and substep: "n / h"."""
     return f"{_short(row['h_or_elements'])}/{float(row['h_s']):.0e}"
@@ -249,6 +292,7 @@ def _short(value):
 def save_figure(fig, path):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+    print(f"wrote {pathlib.Path(path).resolve()}")
 
 
 def cheapest_at(rows, level, error_key="error"):

@@ -20,14 +20,12 @@ Exudyn, two elements:
     round-off at any element count (drawn at 1e-10 in the plot).
 Writes f1_end_moment_precision.csv and .png.
 """
-import argparse
-import pathlib
 import time
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, load_scene, \
-    plot_precision_work, save_figure, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
+    load_scene, plot_precision_work, save_figure, study_arguments, write_csv
 
 L, EI = 1.0, 1.0
 EA = 1e7 * EI / L**2
@@ -131,11 +129,7 @@ def exudyn_static(build, n):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--repeats", type=int, default=3)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=3)
 
     factory = SceneFactory()
     try:
@@ -160,17 +154,13 @@ def main():
     csv_path = args.out / "f1_end_moment_precision.csv"
     write_csv(csv_path, rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7.5, 5))
+    fig, ax = figure()
     plot_precision_work(ax, rows, floor=1e-10)
     ax.set_xlabel("wall time of the static solve (5 load steps) [s]")
     ax.set_ylabel("tip position error at load factor 0.25 [m]")
     ax.set_title("F1 end moment: error against run time (labels: elements; errors < 1e-10 drawn at 1e-10)", fontsize=9)
     png = args.out / "f1_end_moment_precision.png"
     save_figure(fig, png)
-    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

@@ -20,15 +20,13 @@ LoadForceVector with a symbolic load user function. Shear and rotary inertia
 move f1 by about 1e-6 relative, below every error measured here.
 Writes f3_vibration_precision.csv and .png.
 """
-import argparse
-import pathlib
 import time
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, load_scene, \
-    plot_precision_work, refinement_grid, mesh_and_step, save_figure, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_settings, exudyn_solve, figure, grid_study, \
+    load_scene, mesh_and_step, plot_precision_work, refinement_grid, save_figure, study_arguments, write_csv
 
 L, EI, RHO_A, EA, RHO_I = 1.0, 1.0, 1.0, 1e6, 1e-6
 PULSE, FORCE = 0.02, 0.01 * EI / L**2
@@ -130,38 +128,28 @@ def exudyn_beam_2d(n, h):
     return dict(wall_time_s=wall, f1=first_frequency(data[:, 0], data[:, 2]), **statistics)
 
 
+def frequency_error(r):
+    """f1's error against Euler-Bernoulli: CSV columns and log text."""
+    error = abs(r["f1"] / EXACT[0] - 1)
+    return dict(error=error, f1_hz=r["f1"]), f"f1 {r['f1']:.7f} Hz (relative error {error:8.2e})"
+
+
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--repeats", type=int, default=2)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=2)
 
     factory = SceneFactory()
     try:
         fmus = {n: factory.fmu(vibration_scene(n), f"vibration{n}") for n, _ in GRID}
-        rows = []
-        for code, model, run in ((OURS, "3D corotational beam, consistent mass, shallow-arch strain", lambda n, h: ours(fmus[n], n, h)),
-                                 (EXUDYN, "BeamGeometricallyExact2D", exudyn_beam_2d)):
-            for n, h in GRID:
-                r = best_of(lambda: run(n, h), args.repeats)
-                rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"],
-                                 error=abs(r["f1"] / EXACT[0] - 1), model=model, h_s=h, f1_hz=r["f1"],
-                                 steps=r["steps"], newton_iterations=r["newton_iterations"],
-                                 factorizations=r.get("factorizations", ""),
-                                 rejected_steps=r.get("rejected_steps", "")))
-                print(f"F3 {code:9s} n={n:4d} h={h:8.2e}  wall {r['wall_time_s']:7.3f} s  f1 {r['f1']:.7f} Hz "
-                      f"(relative error {rows[-1]['error']:8.2e})  Newton it/step "
-                      f"{r['newton_iterations'] / r['steps']:.2f}", flush=True)
+        rows = grid_study("F3", ((OURS, "3D corotational beam, consistent mass, shallow-arch strain",
+                                  lambda n, h: ours(fmus[n], n, h)),
+                                 (EXUDYN, "BeamGeometricallyExact2D", exudyn_beam_2d)),
+                          GRID, args.repeats, frequency_error)
     finally:
         factory.close()
     csv_path = args.out / "f3_vibration_precision.csv"
     write_csv(csv_path, rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7.5, 5))
+    fig, ax = figure()
     plot_precision_work(ax, rows, annotate=mesh_and_step)
     ax.set_xlabel("wall time for 10 s simulated [s]")
     ax.set_ylabel("relative error of the first bending frequency")
@@ -169,7 +157,6 @@ def main():
                  fontsize=9)
     png = args.out / "f3_vibration_precision.png"
     save_figure(fig, png)
-    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

@@ -30,14 +30,12 @@ the two rotation coordinates (a 2D weld, 3 constraints);
 ObjectBeamGeometricallyExact2D elements.
 Writes f4_motor_precision.csv, f4_motor_reference.csv and f4_motor_precision.png.
 """
-import argparse
-import pathlib
 import time
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, load_scene, \
-    plot_precision_work, refinement_grid, mesh_and_step, read_csv, save_figure, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_settings, exudyn_solve, figure, grid_study, \
+    load_scene, mesh_and_step, plot_precision_work, read_csv, refinement_grid, save_figure, study_arguments, write_csv
 from peer_f4_spin_up import EA, EI, GA, L, RHO_A, RHO_I, RHO_INF, _hub_offset, _hub_rate, extrapolated, hub_angle
 
 HUB_MASS, HUB_INERTIA = 10.0, 2.0
@@ -128,12 +126,14 @@ def exudyn_motor_2d(n, h):
     return dict(wall_time_s=wall, tip=tip_deflection(STOP, data[-1, 1:3]), **statistics)
 
 
+def tip_error(r, reference):
+    """The tip deflection's error at 7 s: CSV columns and log text."""
+    error = abs(r["tip"] - reference)
+    return dict(error=error, tip_deflection_7s_m=r["tip"]), f"tip at 7 s {r['tip']:.6f} m (error {error:8.2e})"
+
+
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--repeats", type=int, default=2)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=2)
 
     factory = SceneFactory()
     try:
@@ -164,30 +164,16 @@ def main():
                                                "(f4_spin_up_reference.csv)"))
                     print(f"  prescribed root node, {r['code']}: {float(r['tip_deflection_7s_m']):.9f} m")
 
-        rows = []
         models = {OURS: "hub on driven revolute, fixed joint to 3D corotational beam",
                   EXUDYN: "RigidBody2D hub, Revolute2D + coordinate drive, weld to BeamGeometricallyExact2D"}
-        for code, run in runs.items():
-            for n, h in GRID:
-                r = best_of(lambda: run(n, h), args.repeats)
-                rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"],
-                                 error=abs(r["tip"] - reference), model=models[code], h_s=h,
-                                 tip_deflection_7s_m=r["tip"], steps=r["steps"],
-                                 newton_iterations=r["newton_iterations"],
-                                 factorizations=r.get("factorizations", ""),
-                                 rejected_steps=r.get("rejected_steps", "")))
-                print(f"F4 motor {code:9s} n={n:4d} h={h:7.1e}  wall {r['wall_time_s']:7.3f} s  tip at 7 s "
-                      f"{r['tip']:.6f} m (error {rows[-1]['error']:8.2e})  Newton it/step "
-                      f"{r['newton_iterations'] / r['steps']:.2f}", flush=True)
+        rows = grid_study("F4 motor", [(code, models[code], run) for code, run in runs.items()], GRID, args.repeats,
+                          lambda r: tip_error(r, reference))
     finally:
         factory.close()
     write_csv(args.out / "f4_motor_precision.csv", rows)
     write_csv(args.out / "f4_motor_reference.csv", reference_rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    fig, ax = figure(figsize=(6.4, 4.8))
     plot_precision_work(ax, rows, annotate=mesh_and_step)
     ax.set_ylabel("tip deflection error at t = 7 s [m]")
     ax.set_xlabel("wall time for 7 s simulated [s]")
@@ -195,7 +181,6 @@ def main():
                  "(labels: elements / substep)", fontsize=9)
     png = args.out / "f4_motor_precision.png"
     save_figure(fig, png)
-    print(f"wrote {(args.out / 'f4_motor_precision.csv').resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

@@ -29,14 +29,12 @@ as an Exudyn symbolic user function (an expression tree evaluated in C++, so
 no Python call per Newton iteration).
 Writes f4_spin_up_precision.csv, f4_spin_up_reference.csv and f4_spin_up_precision.png.
 """
-import argparse
-import pathlib
 import time
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, load_scene, \
-    plot_precision_work, refinement_grid, mesh_and_step, save_figure, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_settings, exudyn_solve, figure, grid_study, \
+    load_scene, mesh_and_step, plot_precision_work, refinement_grid, save_figure, study_arguments, write_csv
 
 L, EA, GA, EI, RHO_A, RHO_I = 10.0, 2.8e7, 1e7, 1.4e4, 1.2, 6e-4
 T_UP, OMEGA = 15.0, 6.0
@@ -152,12 +150,18 @@ def extrapolated(coarse, fine):
     return fine + (fine - coarse) / 3.0
 
 
+def errors(r, reference):
+    """Tip deflection and steady elongation errors: CSV columns and log text."""
+    tip, elongation = abs(r["tip"] - reference), abs(r["elongation"] - ELONGATION)
+    return (dict(error=tip, elongation_error=elongation,
+                 elongation_error_vs_linear=abs(r["elongation"] - ELONGATION_LINEAR), tip_deflection_7s_m=r["tip"],
+                 elongation_m=r["elongation"]),
+            f"tip at 7 s {r['tip']:.6f} m (error {tip:8.2e})  elongation {r['elongation']:.6e} m "
+            f"(error {elongation:8.2e})")
+
+
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--repeats", type=int, default=2)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=2)
 
     factory = SceneFactory()
     try:
@@ -180,33 +184,16 @@ def main():
         print(f"F4 reference tip deflection at 7 s: ours {reference:.9f} m, Exudyn "
               f"{reference_rows[-1]['tip_deflection_7s_m']:.9f} m", flush=True)
 
-        rows = []
-        for code, model, run in ((OURS, "3D corotational beam, consistent mass, shallow-arch strain",
+        rows = grid_study("F4", ((OURS, "3D corotational beam, consistent mass, shallow-arch strain",
                                   lambda n, h: ours(fmus[n], n, h, STOP)),
-                                 (EXUDYN, "BeamGeometricallyExact2D", lambda n, h: exudyn_beam_2d(n, h, STOP))):
-            for n, h in GRID:
-                r = best_of(lambda: run(n, h), args.repeats)
-                rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"],
-                                 error=abs(r["tip"] - reference), model=model, h_s=h,
-                                 elongation_error=abs(r["elongation"] - ELONGATION),
-                                 elongation_error_vs_linear=abs(r["elongation"] - ELONGATION_LINEAR),
-                                 tip_deflection_7s_m=r["tip"], elongation_m=r["elongation"], steps=r["steps"],
-                                 newton_iterations=r["newton_iterations"],
-                                 factorizations=r.get("factorizations", ""),
-                                 rejected_steps=r.get("rejected_steps", "")))
-                print(f"F4 {code:9s} n={n:4d} h={h:7.1e}  wall {r['wall_time_s']:7.3f} s  tip at 7 s "
-                      f"{r['tip']:.6f} m (error {rows[-1]['error']:8.2e})  elongation {r['elongation']:.6e} m "
-                      f"(error {rows[-1]['elongation_error']:8.2e})  Newton it/step "
-                      f"{r['newton_iterations'] / r['steps']:.2f}", flush=True)
+                                 (EXUDYN, "BeamGeometricallyExact2D", lambda n, h: exudyn_beam_2d(n, h, STOP))),
+                          GRID, args.repeats, lambda r: errors(r, reference))
     finally:
         factory.close()
     write_csv(args.out / "f4_spin_up_precision.csv", rows)
     write_csv(args.out / "f4_spin_up_reference.csv", reference_rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, (a, b) = figure(2, (12, 4.8))
     plot_precision_work(a, rows, annotate=mesh_and_step)
     a.set_ylabel("tip deflection error at t = 7 s [m]")
     a.set_title(f"F4 spin-up: tip deflection (rotating frame) at 7 s vs converged {reference:.6f} m", fontsize=9)
@@ -217,7 +204,6 @@ def main():
         ax.set_xlabel("wall time for 20 s simulated [s]")
     png = args.out / "f4_spin_up_precision.png"
     save_figure(fig, png)
-    print(f"wrote {(args.out / 'f4_spin_up_precision.csv').resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

@@ -36,14 +36,12 @@ Wall time: the whole 0.4 s run, outputs every 1 ms in both codes.
 Writes f5_slider_crank_precision.csv, f5_slider_crank_reference.csv and
 f5_slider_crank_precision.png (error against wall time; the curves).
 """
-import argparse
-import pathlib
 import time
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, load_scene, \
-    plot_precision_work, save_figure, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
+    load_scene, plot_precision_work, save_figure, study_arguments, write_csv
 
 CRANK, ROD, OMEGA, T_UP = 0.15, 0.30, 150.0, 0.15
 E, NU, RHO, D = 2e11, 0.3, 7870.0, 0.006
@@ -153,11 +151,7 @@ def exudyn_slider_crank_2d(n, h):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--repeats", type=int, default=2)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=2)
 
     factory = SceneFactory()
     try:
@@ -202,10 +196,7 @@ def main():
     write_csv(args.out / "f5_slider_crank_precision.csv", rows)
     write_csv(args.out / "f5_slider_crank_reference.csv", reference_rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, (a, b) = figure(2, (12, 4.8))
     plot_precision_work(a, rows)
     a.set_xlabel("wall time for 0.4 s simulated [s]")
     a.set_ylabel("max |d(t) - d_ref(t)| over 0..0.4 s [m]")
@@ -223,7 +214,6 @@ def main():
     b.legend(fontsize=7)
     png = args.out / "f5_slider_crank_precision.png"
     save_figure(fig, png)
-    print(f"wrote {(args.out / 'f5_slider_crank_precision.csv').resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

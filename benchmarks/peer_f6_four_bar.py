@@ -56,14 +56,12 @@ about z. Wall time: the whole revolution, outputs every 1/200 of it.
 Writes f6_four_bar_precision.csv, f6_four_bar_reference.csv and
 f6_four_bar_precision.png.
 """
-import argparse
-import pathlib
 import time
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, load_scene, \
-    plot_precision_work, save_figure, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
+    load_scene, plot_precision_work, save_figure, study_arguments, write_csv
 
 OMEGA, T_UP, DEFECT, BETA = 0.6, 1.0, np.radians(5.0), 3e-5
 STOP = 2 * np.pi / OMEGA + T_UP / 2  # one revolution of bar 1
@@ -221,11 +219,7 @@ def exudyn_four_bar(n, k):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--repeats", type=int, default=1)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=1)
 
     factory = SceneFactory()
     try:
@@ -273,10 +267,7 @@ def main():
     write_csv(args.out / "f6_four_bar_precision.csv", rows)
     write_csv(args.out / "f6_four_bar_reference.csv", reference_rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, (a, b) = figure(2, (12, 4.8))
     plot_precision_work(a, rows)
     a.set_xlabel("wall time for one revolution [s]")
     a.set_ylabel(f"max |drive torque - reference| [N m], > {WINDOW} rad from the snaps")
@@ -297,7 +288,6 @@ def main():
     b.legend(fontsize=7)
     png = args.out / "f6_four_bar_precision.png"
     save_figure(fig, png)
-    print(f"wrote {(args.out / 'f6_four_bar_precision.csv').resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

@@ -20,14 +20,12 @@ Exudyn, two models of the same physics:
     coordinates and a Lagrange multiplier).
 Writes r1_pendulum_precision.csv and .png.
 """
-import argparse
-import pathlib
 import time
 
 import numpy as np
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, plot_precision_work, \
-    save_figure, write_csv
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
+    plot_precision_work, save_figure, study_arguments, write_csv
 
 G, L, MASS, STOP = 9.81, 1.0, 1.0, 10.0
 R1_AT_10S = (0.275087462576, -0.961419205099)
@@ -95,12 +93,7 @@ def exudyn_mass_point(h):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--fmu", type=pathlib.Path, default=FMUS / "pendulum.fmu")
-    parser.add_argument("--repeats", type=int, default=3)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "pendulum.fmu")
 
     codes = [(OURS, "revolute joint, joint coordinate", lambda h: ours(args.fmu, h)),
              (EXUDYN, "KinematicTree RevoluteZ (joint coordinate)", exudyn_kinematic_tree),
@@ -119,10 +112,7 @@ def main():
     csv_path = args.out / "r1_pendulum_precision.csv"
     write_csv(csv_path, rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7.5, 5))
+    fig, ax = figure()
     plot_precision_work(ax, rows)
     ax.set_xlabel("wall time for 10 s simulated [s]")
     ax.set_ylabel("bob position error at t = 10 s [m]")
@@ -130,7 +120,6 @@ def main():
                  fontsize=9)
     png = args.out / "r1_pendulum_precision.png"
     save_figure(fig, png)
-    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

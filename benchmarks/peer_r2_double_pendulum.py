@@ -29,13 +29,11 @@ Exudyn, two models of the same physics:
     bar) and index-3 joint constraints with Lagrange multipliers.
 Writes r2_double_pendulum_precision.csv and .png.
 """
-import argparse
-import pathlib
 
 import numpy as np
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, plot_precision_work, \
-    save_figure, write_csv
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
+    plot_precision_work, save_figure, study_arguments, write_csv
 
 G, L, MASS, STOP, OUTPUT = 9.81, 1.0, 1.0, 10.0, 0.01
 J = MASS * L * L / 12  # about the centre of mass, perpendicular to the bar
@@ -145,12 +143,7 @@ def exudyn_rigid_bodies(h):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--fmu", type=pathlib.Path, default=FMUS / "double_pendulum.fmu")
-    parser.add_argument("--repeats", type=int, default=3)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "double_pendulum.fmu")
 
     codes = [(OURS, "two revolute joints, joint coordinates", lambda h: ours(args.fmu, h)),
              (EXUDYN, "KinematicTree 2 x RevoluteZ (joint coordinates)", exudyn_kinematic_tree),
@@ -170,10 +163,7 @@ def main():
     csv_path = args.out / "r2_double_pendulum_precision.csv"
     write_csv(csv_path, rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(12, 5))
+    fig, axes = figure(2, (12, 5))
     plot_precision_work(axes[0], rows)
     axes[0].set_xlabel("wall time for 10 s simulated [s]")
     axes[0].set_ylabel("energy drift max |E(t) - E(0)| / (m g L)")
@@ -185,7 +175,6 @@ def main():
     axes[1].set_title("R2: constraint drift (round-off in joint coordinates)", fontsize=9)
     png = args.out / "r2_double_pendulum_precision.png"
     save_figure(fig, png)
-    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

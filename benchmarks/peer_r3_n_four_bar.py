@@ -35,15 +35,13 @@ Exudyn: 81 RigidBody2D (243 coordinates), 121 RevoluteJoint2D (242 rows,
 index 3), sparse LU (EigenSparse).
 Writes r3_n_four_bar_precision.csv and .png.
 """
-import argparse
 import importlib.util
-import pathlib
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from peer_common import EXUDYN, OURS, ROOT, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, \
-    plot_precision_work, save_figure, write_csv
+from peer_common import EXUDYN, OURS, ROOT, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
+    plot_precision_work, save_figure, study_arguments, write_csv
 
 N, G, MASS, L = 40, 9.81, 1.0, 1.0
 J = MASS * L * L / 12
@@ -167,11 +165,7 @@ def exudyn_rigid_bodies(h):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--repeats", type=int, default=2)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=2)
 
     factory = SceneFactory()
     try:
@@ -209,10 +203,7 @@ def main():
     write_csv(csv_path, rows)
     write_csv(args.out / "r3_n_four_bar_full.csv", [full])
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 3, figsize=(16, 5))
+    fig, axes = figure(3, (16, 5))
     plot_precision_work(axes[0], rows)
     axes[0].set_ylabel(f"crank 0 angle error, max over 0-{STOP:g} s [rad]")
     axes[0].set_title(f"R3 N-four-bar, N = {N}, 0-{STOP:g} s: Exudyn stops at the first singular configuration\n"
@@ -228,7 +219,6 @@ def main():
         ax.set_xlabel(f"wall time for {STOP:g} s simulated [s]")
     png = args.out / "r3_n_four_bar_precision.png"
     save_figure(fig, png)
-    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

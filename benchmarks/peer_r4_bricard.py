@@ -32,14 +32,12 @@ its residual test (relative 1e-8) fails at h = 1e-2, relative 1e-10
 gives 2.9e-5 at h = 1e-3.
 Writes r4_bricard_precision.csv and .png.
 """
-import argparse
-import pathlib
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, plot_precision_work, \
-    save_figure, write_csv
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
+    plot_precision_work, save_figure, study_arguments, write_csv
 
 G, MASS, L, A, STOP, OUTPUT = 9.81, 1.0, 1.0, 0.1, 10.0, 0.01
 POINTS = np.array([(0, 0, 0), (1, 0, 0), (1, -1, 0), (1, -1, 1), (0, -1, 1), (0, 0, 1)], dtype=float)
@@ -145,12 +143,7 @@ def exudyn_rigid_bodies(h):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--fmu", type=pathlib.Path, default=FMUS / "bricard.fmu")
-    parser.add_argument("--repeats", type=int, default=2)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=2, fmu=FMUS / "bricard.fmu")
 
     codes = [(OURS, "5 revolute tree joints + 1 cut joint (redundant row)", lambda h: ours(args.fmu, h)),
              (EXUDYN, "RigidBody EP + 6 JointRevoluteZ, ignoreSingularJacobian", exudyn_rigid_bodies)]
@@ -168,10 +161,7 @@ def main():
     csv_path = args.out / "r4_bricard_precision.csv"
     write_csv(csv_path, rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(12, 5))
+    fig, axes = figure(2, (12, 5))
     plot_precision_work(axes[0], rows)
     axes[0].set_xlabel("wall time for 10 s simulated [s]")
     axes[0].set_ylabel("energy drift max |E(t) - E(0)| / (m g L)")
@@ -182,7 +172,6 @@ def main():
     axes[1].set_title("R4: constraint drift", fontsize=9)
     png = args.out / "r4_bricard_precision.png"
     save_figure(fig, png)
-    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

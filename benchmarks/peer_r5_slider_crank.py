@@ -27,13 +27,11 @@ exact kinematics (with zero initial velocities its velocity error stays at
 0.157 m/s at every h).
 Writes r5_slider_crank_precision.csv and .png.
 """
-import argparse
-import pathlib
 
 import numpy as np
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, plot_precision_work, \
-    save_figure, write_csv
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
+    plot_precision_work, save_figure, study_arguments, write_csv
 
 R, LC, E, OMEGA, G = 0.5, 2.0, 0.1, 2 * np.pi, 9.81
 STOP, OUTPUT = 2.0, 0.01
@@ -136,12 +134,7 @@ def exudyn_rigid_bodies(h):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--fmu", type=pathlib.Path, default=FMUS / "slider_crank.fmu")
-    parser.add_argument("--repeats", type=int, default=3)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "slider_crank.fmu")
 
     codes = [(OURS, "revolute + prismatic tree, cut at the slider pin, driven crank", lambda h: ours(args.fmu, h)),
              (EXUDYN, "RigidBody2D + Revolute/PrismaticJoint2D, driven coordinate", exudyn_rigid_bodies)]
@@ -159,10 +152,7 @@ def main():
     csv_path = args.out / "r5_slider_crank_precision.csv"
     write_csv(csv_path, rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(12, 5))
+    fig, axes = figure(2, (12, 5))
     plot_precision_work(axes[0], rows, floor=1e-17)
     axes[0].set_xlabel("wall time for 2 s simulated [s]")
     axes[0].set_ylabel("slider position error, max |x - x(theta)| [m]")
@@ -174,7 +164,6 @@ def main():
     axes[1].set_title("R5: slider velocity against the exact derivative", fontsize=9)
     png = args.out / "r5_slider_crank_precision.png"
     save_figure(fig, png)
-    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

@@ -28,14 +28,12 @@ points; the shaft angle driven by a CoordinateConstraint whose offset is
 Omega t (Exudyn symbolic user functions, evaluated in C++).
 Writes r6_flyball_governor_precision.csv and .png.
 """
-import argparse
 import math
-import pathlib
 
 import numpy as np
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, plot_precision_work, \
-    save_figure, write_csv
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
+    plot_precision_work, save_figure, study_arguments, write_csv
 
 G, OMEGA = 9.81, 2 * math.pi
 DENSITY, SECTION, LENGTH = 3000.0, 0.01, 1.0
@@ -133,12 +131,7 @@ def deviation(run, reference):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--fmu", type=pathlib.Path, default=FMUS / "flyball_governor.fmu")
-    parser.add_argument("--repeats", type=int, default=2)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=2, fmu=FMUS / "flyball_governor.fmu")
 
     reference = ours(args.fmu, REFERENCE_H)
     print(f"R6 reference: ours at h = {REFERENCE_H:g} ({reference['wall_time_s']:.2f} s, "
@@ -160,10 +153,7 @@ def main():
     csv_path = args.out / "r6_flyball_governor_precision.csv"
     write_csv(csv_path, rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(12, 5))
+    fig, axes = figure(2, (12, 5))
     plot_precision_work(axes[0], rows)
     axes[0].set_xlabel("wall time for 10 s simulated [s]")
     axes[0].set_ylabel(f"slider position error, max over 10 s, against ours at h = {REFERENCE_H:g} [m]")
@@ -174,7 +164,6 @@ def main():
     axes[1].set_title("R6: rod hinge angle against the same reference", fontsize=9)
     png = args.out / "r6_flyball_governor_precision.png"
     save_figure(fig, png)
-    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":

@@ -33,16 +33,14 @@ rotation row makes the zero-inertia body's matrix regular, as our fixed
 joint does); the pulse a LoadForceVector with a symbolic user function.
 Writes tip_mass_precision.csv and .png.
 """
-import argparse
-import pathlib
 import time
 
 import numpy as np
 from scipy.optimize import brentq
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, \
-    plot_precision_work, refinement_grid, mesh_and_step, save_figure, write_csv
-from peer_f3_vibration import first_frequency
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_settings, exudyn_solve, figure, grid_study, \
+    mesh_and_step, plot_precision_work, refinement_grid, save_figure, study_arguments, write_csv
+from peer_f3_vibration import first_frequency, frequency_error
 
 L, EI, RHO_A, EA, RHO_I, TIP_MASS = 1.0, 10.0, 1.0, 1e7, 1e-6, 1.0
 PULSE, FORCE = 0.02, 0.01 * EI / L**2
@@ -143,38 +141,21 @@ def exudyn_beam_2d(n, h):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("benchmarks/results"))
-    parser.add_argument("--repeats", type=int, default=2)
-    args = parser.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = study_arguments(__doc__, repeats=2)
 
     factory = SceneFactory()
     try:
         fmus = {n: factory.fmu(tip_mass_scene(n), f"tip{n}") for n, _ in GRID}
-        rows = []
-        for code, model, run in ((OURS, "3D corotational beam, tip body on a fixed joint",
-                                  lambda n, h: ours(fmus[n], h)),
-                                 (EXUDYN, "BeamGeometricallyExact2D, RigidBody2D welded", exudyn_beam_2d)):
-            for n, h in GRID:
-                r = best_of(lambda: run(n, h), args.repeats)
-                rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"],
-                                 error=abs(r["f1"] / EXACT[0] - 1), model=model, h_s=h, f1_hz=r["f1"],
-                                 steps=r["steps"], newton_iterations=r["newton_iterations"],
-                                 factorizations=r.get("factorizations", ""),
-                                 rejected_steps=r.get("rejected_steps", "")))
-                print(f"tip mass {code:9s} n={n:4d} h={h:8.2e}  wall {r['wall_time_s']:7.3f} s  f1 {r['f1']:.7f} Hz "
-                      f"(relative error {rows[-1]['error']:8.2e})  Newton it/step "
-                      f"{r['newton_iterations'] / r['steps']:.2f}", flush=True)
+        rows = grid_study("tip mass", ((OURS, "3D corotational beam, tip body on a fixed joint",
+                                        lambda n, h: ours(fmus[n], h)),
+                                       (EXUDYN, "BeamGeometricallyExact2D, RigidBody2D welded", exudyn_beam_2d)),
+                          GRID, args.repeats, frequency_error)
     finally:
         factory.close()
     csv_path = args.out / "tip_mass_precision.csv"
     write_csv(csv_path, rows)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7.5, 5))
+    fig, ax = figure()
     plot_precision_work(ax, rows, annotate=mesh_and_step)
     ax.set_xlabel("wall time for 10 s simulated [s]")
     ax.set_ylabel("relative error of the first bending frequency")
@@ -182,7 +163,6 @@ def main():
                  "(labels: elements / substep)", fontsize=9)
     png = args.out / "tip_mass_precision.png"
     save_figure(fig, png)
-    print(f"wrote {csv_path.resolve()}\nwrote {png.resolve()}")
 
 
 if __name__ == "__main__":
