@@ -35,12 +35,15 @@ bool readFile(const std::string& path, std::string& text) {
 
 }  // namespace
 
-void Instance::log(fmi2Status status, const char* category, const std::string& message) const {
-  if (!callbacks_.logger) return;
+bool Instance::logs(fmi2Status status, const char* category) const {
+  if (!callbacks_.logger) return false;
   // Errors and discards always reach the importer; the rest when enabled.
   const bool always = status == fmi2Error || status == fmi2Fatal || status == fmi2Discard;
-  if (!always && !(loggingOn_ && (categories_.empty() || categories_.count(category) || categories_.count("logAll"))))
-    return;
+  return always || (loggingOn_ && (categories_.empty() || categories_.count(category) || categories_.count("logAll")));
+}
+
+void Instance::log(fmi2Status status, const char* category, const std::string& message) const {
+  if (!logs(status, category)) return;
   std::string escaped;  // the logger takes a printf format
   for (char c : message) escaped += c == '%' ? std::string("%%") : std::string(1, c);
   callbacks_.logger(callbacks_.componentEnvironment, name_.c_str(), status, category, escaped.c_str());
@@ -178,9 +181,20 @@ fmi2Status Instance::exitInitializationMode() {
   return fmi2OK;
 }
 
+std::string Instance::solverStatistics() const {
+  if (!simulation_) return "no steps";
+  const IntegratorState& s = simulation_->state();
+  std::ostringstream msg;
+  msg << "substeps " << s.substeps << ", Newton iterations " << s.newtonIterations << ", factorizations "
+      << s.factorizations << ", rejected " << s.rejectedSubsteps;
+  return msg.str();
+}
+
 fmi2Status Instance::terminate() {
   state_ = FmuState::Terminated;
   log(fmi2OK, "logEvents", "terminated at t = " + std::to_string(currentTime()));
+  if (logs(fmi2OK, "logStatistics"))
+    log(fmi2OK, "logStatistics", "t = " + std::to_string(currentTime()) + ": " + solverStatistics());
   return fmi2OK;
 }
 
@@ -305,11 +319,11 @@ fmi2Status Instance::doStep(double t, double H) {
     return fmi2Discard;
   }
   lastSuccessfulTime_ = simulation_->time();
-  const IntegratorState& s = simulation_->state();
-  std::ostringstream msg;
-  msg << "t = " << s.t << ": substeps " << s.substeps << ", Newton iterations " << s.newtonIterations
-      << ", factorizations " << s.factorizations << ", rejected " << s.rejectedSubsteps;
-  log(fmi2OK, "logStep", msg.str());
+  if (logs(fmi2OK, "logStep")) {
+    std::ostringstream msg;
+    msg << "t = " << simulation_->time() << ": " << solverStatistics();
+    log(fmi2OK, "logStep", msg.str());
+  }
   return fmi2OK;
 }
 

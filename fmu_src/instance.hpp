@@ -49,6 +49,9 @@ class Instance {
   fmi2Status unsupported(const char* function, const char* why);
 
   void log(fmi2Status status, const char* category, const std::string& message) const;
+  // Whether a message of this status and category reaches the logger (so
+  // that per-step messages are composed only when they will be read).
+  bool logs(fmi2Status status, const char* category) const;
   fmi2Status fail(const char* function, const std::string& message);  // logs, returns fmi2Error
 
  private:
@@ -56,6 +59,8 @@ class Instance {
   bool buildSimulation(const char* function);
   bool checkValue(const Variable& v, double value, std::string& why) const;
   double currentTime() const;
+  // Substeps, Newton iterations, factorizations and rejected substeps so far.
+  std::string solverStatistics() const;
 
   std::string name_;
   fmi2CallbackFunctions callbacks_{};

@@ -16,6 +16,7 @@ const std::vector<std::pair<std::string, std::string>>& logCategories() {
       {"logStatusDiscard", "Steps that return fmi2Discard"},
       {"logStatusError", "Calls that return fmi2Error"},
       {"logStep", "Per communication step: substeps, Newton iterations"},
+      {"logStatistics", "At fmi2Terminate: substeps, Newton iterations, factorizations of the run"},
       {"logAll", "Everything"},
   };
   return categories;

@@ -69,6 +69,19 @@ System::System(Model model)
   recursiveMatrix_ = model_.analysis == Analysis::Dynamic && !model_.bodies.empty() &&
                      (model_.solver.newtonMatrix == Form::Recursive ||
                       (model_.solver.newtonMatrix == Form::Automatic && !cutJoints && coupled >= dense));
+  // Blocks whose translation rates turn with a stored rotation: free nodes
+  // (rdot in the world frame) and free joints (ddot in the parent marker
+  // frame). Their rotation rates are in the turning frame already, and the
+  // constraint rows are in a joint's parent marker frame, so D S D^T with
+  // these turns is the Newton matrix of the configuration turned rigidly
+  // (turnWithRotations). Not for the recursive form, whose auxiliary
+  // body variations are world-frame quantities of every body.
+  if (!recursiveMatrix_) {
+    for (const FlexNode& node : model_.flexible.nodes)
+      if (node.free && node.rotation >= 0) turningBlocks_.push_back({node.dof[0], node.rotation});
+    for (const Joint& j : model_.joints)
+      if (!j.cut && j.type == JointType::Free) turningBlocks_.push_back({j.velocityOffset, j.rotation});
+  }
 }
 
 void System::startDrives(double t0) {
@@ -88,6 +101,16 @@ double System::driveCoordinate(const Joint& joint, double t) const {
 }
 
 void System::retract(Configuration& q, const VectorXd& dq) const { mfbd::retract(model_.blocks, q, dq); }
+
+void System::turnWithRotations(const Configuration& from, const Configuration& to, VectorXd& x,
+                               bool transpose) const {
+  for (const TurningBlock& b : turningBlocks_) {
+    const Mat3 turn = to.rotations[b.rotation] * from.rotations[b.rotation].transpose();
+    auto block = x.segment<3>(b.velocityOffset);
+    const Vec3 turned = transpose ? Vec3(turn.transpose() * block) : Vec3(turn * block);
+    block = turned;
+  }
+}
 
 void System::endStep(double t) {
   for (std::size_t d = 0; d < drives_.startAngle.size(); ++d)

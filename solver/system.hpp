@@ -54,6 +54,8 @@ class System : public Dynamics {
   void constraintJacobian(double t, const Configuration& q, const VectorXd& v, Triplets& jacobian);
   double constraintLengthScale() const override { return constraintLengthScale_; }
   double tangentCost() const override;
+  void turnWithRotations(const Configuration& from, const Configuration& to, VectorXd& x,
+                         bool transpose) const override;
 
   // Force and torque a cut joint passes to its child (child marker frame,
   // about its origin), from the multipliers (after evaluate()).
@@ -103,6 +105,11 @@ class System : public Dynamics {
   // constructor). Fixed by the topology, so the pattern never changes.
   std::vector<std::vector<int>> supportColumns_;
   Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> ratesCoupled_;
+  // Three translation rates (from velocityOffset) that turn with a stored rotation.
+  struct TurningBlock {
+    int velocityOffset, rotation;
+  };
+  std::vector<TurningBlock> turningBlocks_;
 };
 
 }  // namespace mfbd

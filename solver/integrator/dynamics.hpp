@@ -50,6 +50,13 @@ class Dynamics {
   // integrator's choice between refreshing the Newton matrix and iterating
   // longer with the one it has.
   virtual double tangentCost() const { return 1.0; }
+  // Unknowns whose rows and columns turn with a stored rotation (a flexible
+  // node's world translation turns with the node): x <- D x (or D^T x with
+  // transpose), D block diagonal, the rotation each such block has turned
+  // through from `from` to `to`, identity elsewhere. A Newton matrix
+  // factorised at `from` then serves at `to` as D S D^T. Only velocity rows.
+  virtual void turnWithRotations(const Configuration& /*from*/, const Configuration& /*to*/, VectorXd& /*x*/,
+                                 bool /*transpose*/) const {}
 };
 
 }  // namespace mfbd

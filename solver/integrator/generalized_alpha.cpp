@@ -103,6 +103,7 @@ bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial,
     solver_.analyzePattern(assembledIterationMatrix(), pivotOrder(system, c.cM));
   if (solver_.factorize(assembledIterationMatrix()) != LinearSolver::Status::Ok) return false;
   factoredStep_ = h;
+  factoredAt_ = trial.q;
   correctionNoise_ = constraintNoise(system, system.velocityCount(), system.constraintCount(),
                                      assembledIterationMatrix().rows());
   return true;
@@ -176,7 +177,12 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     rhs.setZero(assembledIterationMatrix().rows());
     rhs.head(n) = -r / betaPrime;
     rhs.segment(n, m) = -phi;
+    // The matrix factorised at factoredAt_, turned with the rotations since
+    // (Dynamics::turnWithRotations): a spinning beam's matrix stays good
+    // for as long as its deformation and speed change little.
+    system.turnWithRotations(factoredAt_, trial.q, rhs, true);
     solver_.solve(rhs, delta);
+    system.turnWithRotations(factoredAt_, trial.q, delta, false);
     ++s.newtonIterations;
     if (withFreshMatrix >= 0) ++withFreshMatrix;
     const double size = delta.head(n).cwiseAbs().maxCoeff();

@@ -54,6 +54,7 @@ class GeneralizedAlpha : public TimeStepper {
   LinearSolver solver_;
   double factoredStep_ = 0.0;  // substep size of the current factorization; 0 = none
   double correctionNoise_ = 0.0;  // of the current factorization (constraintNoise)
+  Configuration factoredAt_;
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
   double lastIterations_ = 1e9;  // Newton iterations of the last accepted substep (none yet: many)

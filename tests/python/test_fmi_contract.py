@@ -1,6 +1,7 @@
 """The FMI 2.0 Co-Simulation contract: call sequence, logging, reset,
 resource URIs, capabilities, bad values, discarded steps, two instances."""
 import pathlib
+import re
 import shutil
 
 import numpy as np
@@ -165,5 +166,15 @@ def test_log_categories_filter_and_unknown_category_is_refused(slave):
     categories = {c for _, c, _ in slave.log}
     assert categories == {"logStep"}
     assert any("Newton iterations" in m for _, _, m in slave.log)
+    # The run's totals once, at fmi2Terminate, and only when asked for.
+    slave.step(0.01, 0.01)
+    assert slave.call("setDebugLogging", True, ["logStatistics"]) == OK
+    slave.log.clear()
+    slave.step(0.02, 0.01)
+    assert slave.log == []
+    assert slave.call("terminate") == OK
+    assert [c for _, c, _ in slave.log] == ["logStatistics"]
+    substeps = int(re.search(r"substeps (\d+)", slave.log[0][2]).group(1))
+    assert substeps == 3 * round(0.01 / 1e-3), slave.log  # the pendulum's h_max = 1e-3
     assert slave.call("setDebugLogging", True, ["logNoSuchThing"]) == ERROR
     assert 'unknown log category "logNoSuchThing"' in slave.messages()
