@@ -96,9 +96,12 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
   double h = std::min(s.h > 0.0 ? s.h : options_.hMax, options_.hMax);
   int successes = 0;
   while (tEnd - s.t > 1e-12 * std::max(1.0, std::abs(tEnd))) {
+    // The rest in equal substeps of at most h (within round-off): no short
+    // last one, and every substep of a run at constant h the same size, so
+    // the Newton matrix of one serves the next (GeneralizedAlpha keeps it
+    // only for the same h).
     const double remaining = tEnd - s.t;
-    // Take the rest in one substep when it fits (within round-off), else h.
-    const double step = remaining <= h * (1.0 + 1e-9) ? remaining : h;
+    const double step = remaining / std::max(1.0, std::ceil(remaining / h * (1.0 - 1e-9)));
     std::string why;
     if (substep(system, s, step, why)) {
       if (++successes >= 2 && h < options_.hMax) {
