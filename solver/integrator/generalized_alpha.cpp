@@ -136,6 +136,10 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
 
   // Predictor with vdot_{n+1} = vdot_n. (The trial state and the vectors
   // of the iteration are members: assigned, not allocated, every substep.)
+  if (freshStarts_ > 0) {
+    --freshStarts_;
+    factoredStep_ = 0.0;
+  }
   IntegratorState& trial = trial_;
   trial = s;
   trial.t = s.t + h;
@@ -248,6 +252,11 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
         return false;
       }
       factoredStep_ = 0.0;  // refactorise at the next iteration
+      // A matrix from an earlier substep that did not contract at all
+      // (rate near 1 at the first check): the next few substeps start
+      // with a fresh one rather than spend two corrections finding out
+      // again (see freshStarts_).
+      if (withFreshMatrix < 0 && k == 1 && size > 0.5 * previous) freshStarts_ = kFreshStarts;
     }
     previous = size;
   }

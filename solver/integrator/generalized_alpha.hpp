@@ -57,6 +57,14 @@ class GeneralizedAlpha : public TimeStepper {
   Configuration factoredAt_;
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
+  // Substeps still to start with a fresh matrix after an earlier
+  // substep's matrix failed to contract: a system whose Newton matrix
+  // changes too fast for modified Newton (the flexible four-bar with its
+  // defect: 0.3 % entry changes per substep, a 50 times larger first
+  // correction) then pays a tangent per substep but no wasted corrections;
+  // every kFreshStarts + 1 substeps the kept matrix is tried again.
+  int freshStarts_ = 0;
+  static constexpr int kFreshStarts = 4;
   double lastIterations_ = 1e9;  // Newton iterations of the last accepted substep (none yet: many)
 };
 
