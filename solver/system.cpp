@@ -112,6 +112,16 @@ void System::turnWithRotations(const Configuration& from, const Configuration& t
   }
 }
 
+void System::turnOverStep(const Configuration& q, const VectorXd& v, double h, VectorXd& x) const {
+  for (const TurningBlock& b : turningBlocks_) {
+    const Mat3& R = q.rotations[b.rotation];
+    const Mat3 turn = R * expSO3(h * Vec3(v.segment<3>(b.velocityOffset + 3))) * R.transpose();
+    auto block = x.segment<3>(b.velocityOffset);
+    const Vec3 turned = turn * block;
+    block = turned;
+  }
+}
+
 void System::endStep(double t) {
   for (std::size_t d = 0; d < drives_.startAngle.size(); ++d)
     drives_.startAngle[d] = drives_.angle(model_.flexible, flexibleInputs_, int(d), t);

@@ -56,6 +56,7 @@ class System : public Dynamics {
   double tangentCost() const override;
   void turnWithRotations(const Configuration& from, const Configuration& to, VectorXd& x,
                          bool transpose) const override;
+  void turnOverStep(const Configuration& q, const VectorXd& v, double h, VectorXd& x) const override;
 
   // Force and torque a cut joint passes to its child (child marker frame,
   // about its origin), from the multipliers (after evaluate()).

@@ -57,6 +57,10 @@ class Dynamics {
   // factorised at `from` then serves at `to` as D S D^T. Only velocity rows.
   virtual void turnWithRotations(const Configuration& /*from*/, const Configuration& /*to*/, VectorXd& /*x*/,
                                  bool /*transpose*/) const {}
+  // The same blocks of x turned through the rotation their bodies make in
+  // time h at their present angular velocity (from v): the world-frame
+  // acceleration of a point on a spinning body turns with it.
+  virtual void turnOverStep(const Configuration& /*q*/, const VectorXd& /*v*/, double /*h*/, VectorXd& /*x*/) const {}
 };
 
 }  // namespace mfbd
