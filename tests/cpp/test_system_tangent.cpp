@@ -67,6 +67,28 @@ Eigen::MatrixXd dense(const Triplets& t, int rows, int cols) {
   return m;
 }
 
+// A deformed, moving state away from the design configuration (the
+// constraints need not hold for a Jacobian check): coordinates moved by up
+// to 0.2, rates and accelerations up to 1, multipliers up to 10.
+IntegratorState randomState(const System& system, double t, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto random = [&](int size, double scale) {
+    VectorXd x(size);
+    for (int i = 0; i < size; ++i) x[i] = scale * u(rng);
+    return x;
+  };
+  const int n = system.velocityCount();
+  IntegratorState s;
+  s.t = t;
+  s.q = system.model().initialConfiguration;
+  system.retract(s.q, random(n, 0.2));
+  s.v = random(n, 1.0);
+  s.vdot = random(n, 1.0);
+  s.lambda = random(system.constraintCount(), 10.0);
+  return s;
+}
+
 class CoupledSystem : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -74,20 +96,8 @@ class CoupledSystem : public ::testing::Test {
     system = std::make_unique<System>(assemble(scene));
     n = system->velocityCount();
     m = system->constraintCount();
-    std::mt19937 rng(7);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    auto random = [&](int size, double scale) {
-      VectorXd x(size);
-      for (int i = 0; i < size; ++i) x[i] = scale * u(rng);
-      return x;
-    };
-    // A deformed, moving state away from the design configuration (the
-    // constraints need not hold for a Jacobian check).
-    q = system->model().initialConfiguration;
-    system->retract(q, random(n, 0.2));
-    v = random(n, 1.0);
-    vdot = random(n, 1.0);
-    lambda = random(m, 10.0);
+    const IntegratorState s = randomState(*system, t, 7);
+    q = s.q, v = s.v, vdot = s.vdot, lambda = s.lambda;
   }
 
   std::unique_ptr<System> system;
@@ -228,17 +238,10 @@ TEST(SparseRigidTangent, TreeWithWeldedBeamMatchesFiniteDifferences) {
   })";
   System system(assemble(parseScene(scene)));
   const int n = system.velocityCount(), m = system.constraintCount();
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  auto random = [&](int size, double scale) {
-    VectorXd x(size);
-    for (int i = 0; i < size; ++i) x[i] = scale * u(rng);
-    return x;
-  };
-  Configuration q = system.model().initialConfiguration;
-  system.retract(q, random(n, 0.2));
-  const VectorXd v = random(n, 1.0), vdot = random(n, 1.0), lambda = random(m, 10.0);
   const double t = 0.2, eps = 1e-6;
+  const IntegratorState s = randomState(system, t, 11);
+  const Configuration& q = s.q;
+  const VectorXd &v = s.v, &vdot = s.vdot, &lambda = s.lambda;
   for (const auto& [cC, cK] : {std::pair{0.0, 1.0}, std::pair{1.0, 0.0}}) {
     Triplets iteration, jacobian;
     system.tangent(t, q, v, vdot, lambda, 0.0, cC, cK, iteration, jacobian);
@@ -300,18 +303,7 @@ TEST(TurnedNewtonMatrix, IsTheMatrixOfTheRigidlyTurnedState) {
   System system(assemble(parseScene(scene)));
   const Model& model = system.model();
   const int n = system.velocityCount(), m = system.constraintCount();
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  auto random = [&](int size, double scale) {
-    VectorXd x(size);
-    for (int i = 0; i < size; ++i) x[i] = scale * u(rng);
-    return x;
-  };
-  IntegratorState a;
-  a.t = 0.1;
-  a.q = model.initialConfiguration;
-  system.retract(a.q, random(n, 0.2));
-  a.v = random(n, 1.0), a.vdot = random(n, 1.0), a.lambda = random(m, 10.0);
+  const IntegratorState a = randomState(system, 0.1, 5);
 
   // The same state turned by Q about the world origin.
   const Mat3 Q = expSO3(Vec3(0.7, -1.1, 0.4));
