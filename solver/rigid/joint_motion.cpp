@@ -1,11 +1,24 @@
 #include "rigid/joint_motion.hpp"
 
+#include <cmath>
+
 #include "model/model.hpp"
 
 namespace mfbd {
 
 namespace {
-Mat3 rotationAbout(const Vec3& axis, double angle) { return expSO3(axis * angle); }
+// Rotation by `angle` about the coordinate axis `k` (0, 1, 2: x, y, z) of the
+// joint frame: one sincos, no general exponential map (the revolute joint's
+// rotation is a fifth of a one-body substep's work through expSO3).
+Mat3 rotationAbout(int k, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  const int i = (k + 1) % 3, j = (k + 2) % 3;
+  Mat3 R = Mat3::Zero();
+  R(k, k) = 1.0;
+  R(i, i) = c, R(j, j) = c;
+  R(j, i) = s, R(i, j) = -s;
+  return R;
+}
 }  // namespace
 
 JointMotion jointMotion(const Joint& joint, const Configuration& q, const Eigen::Ref<const VectorXd>& qdot) {
@@ -16,7 +29,7 @@ JointMotion jointMotion(const Joint& joint, const Configuration& q, const Eigen:
   const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), ez = Vec3::UnitZ();
   switch (joint.type) {
     case JointType::Revolute:
-      m.rotation = rotationAbout(ez, s(0));
+      m.rotation = rotationAbout(2, s(0));
       m.Hw.col(0) = ez;
       break;
     case JointType::Prismatic:
@@ -24,14 +37,14 @@ JointMotion jointMotion(const Joint& joint, const Configuration& q, const Eigen:
       m.Hv.col(0) = ez;
       break;
     case JointType::Cylindrical:  // coordinates: angle, slide
-      m.rotation = rotationAbout(ez, s(0));
+      m.rotation = rotationAbout(2, s(0));
       m.translation = ez * s(1);
       m.Hw.col(0) = ez;
       m.Hv.col(1) = ez;
       break;
     case JointType::Universal: {  // R = Rx(a) Ry(b); omega_C = Ry(b)^T ex adot + ey bdot
-      const Mat3 Ry = rotationAbout(ey, s(1));
-      m.rotation = rotationAbout(ex, s(0)) * Ry;
+      const Mat3 Ry = rotationAbout(1, s(1));
+      m.rotation = rotationAbout(0, s(0)) * Ry;
       m.Hw.col(0) = Ry.transpose() * ex;
       m.Hw.col(1) = ey;
       // d/dt (Ry^T ex) = -(ey bdot) x (Ry^T ex)
@@ -43,7 +56,7 @@ JointMotion jointMotion(const Joint& joint, const Configuration& q, const Eigen:
       m.Hw = Mat3::Identity();
       break;
     case JointType::Planar:  // coordinates: x, y, angle
-      m.rotation = rotationAbout(ez, s(2));
+      m.rotation = rotationAbout(2, s(2));
       m.translation = Vec3(s(0), s(1), 0.0);
       m.Hv.col(0) = ex;
       m.Hv.col(1) = ey;
