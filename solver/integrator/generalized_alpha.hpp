@@ -4,6 +4,9 @@
 // stays well conditioned as h -> 0:
 //   [ M + (gamma'/beta') C + K/beta'   Phi_q^T ] [ dq          ]   [ -r/beta' ]
 //   [ Phi_q                            0       ] [ dlambda/beta'] = [ -Phi     ]
+// Modified Newton: the factorised matrix is kept across substeps, turned with
+// the bodies that rotated since (Dynamics::turnWithRotations), and refreshed
+// when the contraction slows (see substep and beginAdvance).
 // Newton failure halves the substep down to h_min; the caller keeps the state
 // of the step start and reports a discarded step.
 #pragma once
