@@ -104,6 +104,7 @@ bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial,
   if (solver_.factorize(assembledIterationMatrix()) != LinearSolver::Status::Ok) return false;
   factoredStep_ = h;
   factoredAt_ = trial.q;
+  substepsSinceFactorization_ = 0.0;
   correctionNoise_ = constraintNoise(system, system.velocityCount(), system.constraintCount(),
                                      assembledIterationMatrix().rows());
   return true;
@@ -218,11 +219,13 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     // correct round-off. Under quadratic (fresh-matrix) convergence rho
     // falls from one iteration to the next, so the estimate is pessimistic.
     const double rho = k > 0 ? size / previous : 1.0;
+    if (k == 1 && withFreshMatrix < 0) firstRate_ = rho;
     const double remaining = rho < 1.0 ? rho / (1.0 - rho) * size : HUGE_VAL;
     const double floor = std::max({0.01 * options_.tolerance, coordinateFloor, 4.0 * correctionNoise_});
     const bool small = size <= floor || remaining <= options_.tolerance;
     if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= std::max(options_.tolerance, phiFloor))) {
       lastIterations_ = k + 1;
+      substepsSinceFactorization_ += 1.0;
       trial.substeps = s.substeps + 1;
       trial.newtonIterations = s.newtonIterations;
       trial.factorizations = s.factorizations;
