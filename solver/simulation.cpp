@@ -178,11 +178,7 @@ bool Simulation::initialize(double t0, std::string& message, std::vector<std::st
     notes->push_back("Newton matrix in the recursive form: " + std::to_string(system_.model().bodies.size()) +
                      " bodies, " + std::to_string(system_.auxiliaryCount(1.0)) +
                      " body-level unknowns (solver.newton_matrix)");
-  if (!stepper_->initialize(system_, state_, message)) return false;
-  outputsCurrent_ = false;
-  evaluateOutputs(false);
-  updateQuaternions(true);
-  return true;
+  return startIntegrator(message);
 }
 
 bool Simulation::startFromEquilibrium(std::string& message, std::vector<std::string>* notes) {
@@ -190,10 +186,10 @@ bool Simulation::startFromEquilibrium(std::string& message, std::vector<std::str
   InitialEquilibriumReport report;
   if (!solveInitialEquilibrium(system_, state_, scene_.solver, report, message)) return false;
   if (notes) notes->push_back(report.describe(system_));
-  if (notes && system_.recursiveNewtonMatrix())
-    notes->push_back("Newton matrix in the recursive form: " + std::to_string(system_.model().bodies.size()) +
-                     " bodies, " + std::to_string(system_.auxiliaryCount(1.0)) +
-                     " body-level unknowns (solver.newton_matrix)");
+  return startIntegrator(message);
+}
+
+bool Simulation::startIntegrator(std::string& message) {
   if (!stepper_->initialize(system_, state_, message)) return false;
   outputsCurrent_ = false;
   evaluateOutputs(false);

@@ -79,6 +79,9 @@ class Simulation {
   bool write(const Quantity& q, double value);
 
  private:
+  // The integrator's consistent start (accelerations, multipliers) at the
+  // present state, and the outputs of that state.
+  bool startIntegrator(std::string& message);
   void evaluateOutputs(bool reactions);
 
   void updateQuaternions(bool reset);
