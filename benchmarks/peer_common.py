@@ -180,6 +180,33 @@ def exudyn_solve(mbs, settings, static=False):
                       factorizations=int(it.newtonJacobiCount))
 
 
+def exudyn_beam_line_2d(mbs, n, length, mass_per_length, rotary_inertia, EI, EA, GA, start=0.0):
+    """n Exudyn ObjectBeamGeometricallyExact2D elements on n + 1 NodeRigidBody2D
+    nodes along x from `start`; returns the nodes."""
+    from exudyn.itemInterface import NodeRigidBody2D, ObjectBeamGeometricallyExact2D
+
+    nodes = [mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[start + length * i / n, 0.0, 0.0]))
+             for i in range(n + 1)]
+    for i in range(n):
+        mbs.AddObject(ObjectBeamGeometricallyExact2D(
+            nodeNumbers=[nodes[i], nodes[i + 1]], length=length / n, massPerLength=mass_per_length,
+            crossSectionInertia=rotary_inertia, bendingStiffness=EI, axialStiffness=EA, shearStiffness=GA))
+    return nodes
+
+
+def exudyn_clamp_coordinates(mbs, node, count):
+    """Exudyn coordinate constraints holding the first `count` coordinates of
+    a node at their reference (or at an offset set on them later); returns
+    the connector objects."""
+    from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround, ObjectConnectorCoordinate
+
+    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+    fixed = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
+    return [mbs.AddObject(ObjectConnectorCoordinate(
+        markerNumbers=[fixed, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=c))]))
+        for c in range(count)]
+
+
 def study_arguments(doc, repeats, fmu=None, extra=()):
     """The command line of a peer study: --out (made if missing), --repeats,
     --fmu when the study runs one packed FMU, and `extra` as (flag, kwargs)."""

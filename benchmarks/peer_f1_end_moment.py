@@ -24,8 +24,9 @@ import time
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
-    load_scene, plot_precision_work, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, best_of, exudyn_beam_line_2d, \
+    exudyn_clamp_coordinates, exudyn_settings, exudyn_solve, figure, load_scene, plot_precision_work, save_figure, \
+    study_arguments, write_csv
 
 L, EI = 1.0, 1.0
 EA = 1e7 * EI / L**2
@@ -64,29 +65,13 @@ def ours(fmu, n):
     return dict(wall_time_s=wall, error=tip_error(x, y), **statistics)
 
 
-def clamp_coordinates(mbs, node, count):
-    """Coordinate constraints holding `count` coordinates of a node at their reference."""
-    from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround, ObjectConnectorCoordinate
-
-    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
-    fixed = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
-    return [mbs.AddObject(ObjectConnectorCoordinate(
-        markerNumbers=[fixed, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=node, coordinate=c))]))
-        for c in range(count)]
-
-
 def exudyn_beam_2d(n, sparse):
     import exudyn as exu
-    from exudyn.itemInterface import LoadTorqueVector, MarkerNodeRigid, NodeRigidBody2D, \
-        ObjectBeamGeometricallyExact2D
+    from exudyn.itemInterface import LoadTorqueVector, MarkerNodeRigid
 
     mbs = exu.SystemContainer().AddSystem()
-    nodes = [mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[L * i / n, 0.0, 0.0])) for i in range(n + 1)]
-    for i in range(n):
-        mbs.AddObject(ObjectBeamGeometricallyExact2D(
-            nodeNumbers=[nodes[i], nodes[i + 1]], length=L / n, massPerLength=1.0, crossSectionInertia=1e-4,
-            bendingStiffness=EI, axialStiffness=EA, shearStiffness=EA))
-    clamp_coordinates(mbs, nodes[0], 3)
+    nodes = exudyn_beam_line_2d(mbs, n, L, 1.0, 1e-4, EI, EA, EA)
+    exudyn_clamp_coordinates(mbs, nodes[0], 3)
     tip = mbs.AddMarker(MarkerNodeRigid(nodeNumber=nodes[-1]))
     mbs.AddLoad(LoadTorqueVector(markerNumber=tip, loadVector=[0.0, 0.0, LAMBDA * 2 * np.pi * EI / L]))
     return mbs, nodes[-1]

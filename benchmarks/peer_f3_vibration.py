@@ -25,8 +25,9 @@ import time
 import numpy as np
 from scipy.optimize import least_squares
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_settings, exudyn_solve, figure, grid_study, \
-    load_scene, mesh_and_step, plot_precision_work, refinement_grid, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
+    exudyn_settings, exudyn_solve, figure, grid_study, load_scene, mesh_and_step, plot_precision_work, \
+    refinement_grid, save_figure, study_arguments, write_csv
 
 L, EI, RHO_A, EA, RHO_I = 1.0, 1.0, 1.0, 1e6, 1e-6
 PULSE, FORCE = 0.02, 0.01 * EI / L**2
@@ -101,20 +102,11 @@ def _pulse(mbs, t, loadVector):
 def exudyn_beam_2d(n, h):
     import exudyn as exu
     from exudyn.advancedUtilities import CreateSymbolicUserFunction
-    from exudyn.itemInterface import LoadForceVector, MarkerNodeCoordinate, MarkerNodePosition, NodePointGround, \
-        NodeRigidBody2D, ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate, SensorNode
+    from exudyn.itemInterface import LoadForceVector, MarkerNodePosition, SensorNode
 
     mbs = exu.SystemContainer().AddSystem()
-    nodes = [mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[L * i / n, 0.0, 0.0])) for i in range(n + 1)]
-    for i in range(n):
-        mbs.AddObject(ObjectBeamGeometricallyExact2D(
-            nodeNumbers=[nodes[i], nodes[i + 1]], length=L / n, massPerLength=RHO_A, crossSectionInertia=RHO_I,
-            bendingStiffness=EI, axialStiffness=EA, shearStiffness=EA))
-    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
-    fixed = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
-    for c in range(3):
-        mbs.AddObject(ObjectConnectorCoordinate(
-            markerNumbers=[fixed, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=c))]))
+    nodes = exudyn_beam_line_2d(mbs, n, L, RHO_A, RHO_I, EI, EA, EA)
+    exudyn_clamp_coordinates(mbs, nodes[0], 3)
     load = mbs.AddLoad(LoadForceVector(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[-1])),
                                        loadVector=[0.0, 0.0, 0.0]))
     pulse = CreateSymbolicUserFunction(mbs, _pulse, "loadVectorUserFunction", load)  # alive through the solve

@@ -34,8 +34,9 @@ import time
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_settings, exudyn_solve, figure, grid_study, \
-    load_scene, mesh_and_step, plot_precision_work, read_csv, refinement_grid, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, exudyn_beam_line_2d, exudyn_settings, exudyn_solve, \
+    figure, grid_study, load_scene, mesh_and_step, plot_precision_work, read_csv, refinement_grid, save_figure, \
+    study_arguments, write_csv
 from peer_f4_spin_up import EA, EI, GA, L, RHO_A, RHO_I, RHO_INF, _hub_offset, _hub_rate, extrapolated, hub_angle
 
 HUB_MASS, HUB_INERTIA = 10.0, 2.0
@@ -84,16 +85,12 @@ def ours(fmu, n, h):
 def exudyn_motor_2d(n, h):
     import exudyn as exu
     from exudyn.advancedUtilities import CreateSymbolicUserFunction
-    from exudyn.itemInterface import MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, NodePointGround, \
-        NodeRigidBody2D, ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate, ObjectGround, \
-        ObjectJointRevolute2D, ObjectRigidBody2D, SensorNode
+    from exudyn.itemInterface import MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, \
+        NodePointGround, NodeRigidBody2D, ObjectConnectorCoordinate, ObjectGround, ObjectJointRevolute2D, \
+        ObjectRigidBody2D, SensorNode
 
     mbs = exu.SystemContainer().AddSystem()
-    nodes = [mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[L * i / n, 0.0, 0.0])) for i in range(n + 1)]
-    for i in range(n):
-        mbs.AddObject(ObjectBeamGeometricallyExact2D(
-            nodeNumbers=[nodes[i], nodes[i + 1]], length=L / n, massPerLength=RHO_A, crossSectionInertia=RHO_I,
-            bendingStiffness=EI, axialStiffness=EA, shearStiffness=GA))
+    nodes = exudyn_beam_line_2d(mbs, n, L, RHO_A, RHO_I, EI, EA, GA)
     hub_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0.0, 0.0, 0.0]))
     hub = mbs.AddObject(ObjectRigidBody2D(nodeNumber=hub_node, mass=HUB_MASS, inertia=HUB_INERTIA))
     ground = mbs.AddObject(ObjectGround())

@@ -33,8 +33,9 @@ import time
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_settings, exudyn_solve, figure, grid_study, \
-    load_scene, mesh_and_step, plot_precision_work, refinement_grid, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
+    exudyn_settings, exudyn_solve, figure, grid_study, load_scene, mesh_and_step, plot_precision_work, \
+    refinement_grid, save_figure, study_arguments, write_csv
 
 L, EA, GA, EI, RHO_A, RHO_I = 10.0, 2.8e7, 1e7, 1.4e4, 1.2, 6e-4
 T_UP, OMEGA = 15.0, 6.0
@@ -115,20 +116,11 @@ def _hub_rate(mbs, t, itemNumber, lOffset):
 def exudyn_beam_2d(n, h, stop):
     import exudyn as exu
     from exudyn.advancedUtilities import CreateSymbolicUserFunction
-    from exudyn.itemInterface import MarkerNodeCoordinate, NodePointGround, NodeRigidBody2D, \
-        ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate, SensorNode
+    from exudyn.itemInterface import SensorNode
 
     mbs = exu.SystemContainer().AddSystem()
-    nodes = [mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[L * i / n, 0.0, 0.0])) for i in range(n + 1)]
-    for i in range(n):
-        mbs.AddObject(ObjectBeamGeometricallyExact2D(
-            nodeNumbers=[nodes[i], nodes[i + 1]], length=L / n, massPerLength=RHO_A, crossSectionInertia=RHO_I,
-            bendingStiffness=EI, axialStiffness=EA, shearStiffness=GA))
-    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
-    fixed = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
-    root = [mbs.AddObject(ObjectConnectorCoordinate(
-        markerNumbers=[fixed, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=c))]))
-        for c in range(3)]
+    nodes = exudyn_beam_line_2d(mbs, n, L, RHO_A, RHO_I, EI, EA, GA)
+    root = exudyn_clamp_coordinates(mbs, nodes[0], 3)
     # The symbolic functions must outlive the solve: keep them in this frame.
     offset = CreateSymbolicUserFunction(mbs, _hub_offset, "offsetUserFunction", root[2])
     rate = CreateSymbolicUserFunction(mbs, _hub_rate, "offsetUserFunction_t", root[2])

@@ -40,8 +40,8 @@ import time
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
-    load_scene, plot_precision_work, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, best_of, exudyn_beam_line_2d, exudyn_settings, \
+    exudyn_solve, figure, load_scene, plot_precision_work, save_figure, study_arguments, write_csv
 
 CRANK, ROD, OMEGA, T_UP = 0.15, 0.30, 150.0, 0.15
 E, NU, RHO, D = 2e11, 0.3, 7870.0, 0.006
@@ -108,17 +108,12 @@ def _crank_rate(mbs, t, itemNumber, lOffset):
 def exudyn_slider_crank_2d(n, h):
     import exudyn as exu
     from exudyn.advancedUtilities import CreateSymbolicUserFunction
-    from exudyn.itemInterface import MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, NodePointGround, \
-        NodeRigidBody2D, ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate, ObjectGround, \
-        ObjectJointRevolute2D, ObjectRigidBody2D, SensorNode
+    from exudyn.itemInterface import MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, \
+        NodePointGround, NodeRigidBody2D, ObjectConnectorCoordinate, ObjectGround, ObjectJointRevolute2D, \
+        ObjectRigidBody2D, SensorNode
 
     mbs = exu.SystemContainer().AddSystem()
-    nodes = [mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[CRANK + ROD * i / n, 0.0, 0.0]))
-             for i in range(n + 1)]
-    for i in range(n):
-        mbs.AddObject(ObjectBeamGeometricallyExact2D(
-            nodeNumbers=[nodes[i], nodes[i + 1]], length=ROD / n, massPerLength=RHO_A, crossSectionInertia=RHO_I,
-            bendingStiffness=EI, axialStiffness=EA, shearStiffness=GA))
+    nodes = exudyn_beam_line_2d(mbs, n, ROD, RHO_A, RHO_I, EI, EA, GA, start=CRANK)
     crank_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[CRANK / 2, 0.0, 0.0]))
     crank = mbs.AddObject(ObjectRigidBody2D(nodeNumber=crank_node, mass=CRANK_MASS, inertia=CRANK_INERTIA))
     ground = mbs.AddObject(ObjectGround())

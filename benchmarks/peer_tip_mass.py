@@ -38,8 +38,9 @@ import time
 import numpy as np
 from scipy.optimize import brentq
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_settings, exudyn_solve, figure, grid_study, \
-    mesh_and_step, plot_precision_work, refinement_grid, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
+    exudyn_settings, exudyn_solve, figure, grid_study, mesh_and_step, plot_precision_work, refinement_grid, \
+    save_figure, study_arguments, write_csv
 from peer_f3_vibration import first_frequency, frequency_error
 
 L, EI, RHO_A, EA, RHO_I, TIP_MASS = 1.0, 10.0, 1.0, 1e7, 1e-6, 1.0
@@ -104,21 +105,13 @@ def _pulse(mbs, t, loadVector):
 def exudyn_beam_2d(n, h):
     import exudyn as exu
     from exudyn.advancedUtilities import CreateSymbolicUserFunction
-    from exudyn.itemInterface import LoadForceVector, MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, \
-        NodePointGround, NodeRigidBody2D, ObjectBeamGeometricallyExact2D, ObjectConnectorCoordinate, \
-        ObjectJointRevolute2D, ObjectRigidBody2D, SensorBody
+    from exudyn.itemInterface import LoadForceVector, MarkerBodyPosition, MarkerNodeCoordinate, \
+        MarkerNodePosition, NodeRigidBody2D, ObjectConnectorCoordinate, ObjectJointRevolute2D, ObjectRigidBody2D, \
+        SensorBody
 
     mbs = exu.SystemContainer().AddSystem()
-    nodes = [mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[L * i / n, 0.0, 0.0])) for i in range(n + 1)]
-    for i in range(n):
-        mbs.AddObject(ObjectBeamGeometricallyExact2D(
-            nodeNumbers=[nodes[i], nodes[i + 1]], length=L / n, massPerLength=RHO_A, crossSectionInertia=RHO_I,
-            bendingStiffness=EI, axialStiffness=EA, shearStiffness=EA))
-    ground = mbs.AddNode(NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
-    fixed = mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground, coordinate=0))
-    for c in range(3):
-        mbs.AddObject(ObjectConnectorCoordinate(
-            markerNumbers=[fixed, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=c))]))
+    nodes = exudyn_beam_line_2d(mbs, n, L, RHO_A, RHO_I, EI, EA, EA)
+    exudyn_clamp_coordinates(mbs, nodes[0], 3)
     tip_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[L, 0.0, 0.0]))
     tip = mbs.AddObject(ObjectRigidBody2D(nodeNumber=tip_node, mass=TIP_MASS, inertia=0.0))
     mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
