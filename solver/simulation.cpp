@@ -215,7 +215,7 @@ AdvanceResult Simulation::doStep(double H) {
   // retried step restarts from the same state again.
   // Statics: an input that jumped breaks the load path the predictor follows.
   if (inputsChangedSinceStep_) state_.pathRate.resize(0);
-  IntegratorState start = state_;
+  stepStart_ = state_;  // assigned into kept buffers: no allocation per step
   // An input that jumped at this communication point is a discontinuity:
   // restart generalized-alpha there, or its algorithmic acceleration would
   // carry the old input into the step (an O(h) error that does not go away).
@@ -240,7 +240,7 @@ AdvanceResult Simulation::doStep(double H) {
       const std::string redundant = redundantConstraints(state_.q, state_.v, false);
       if (!redundant.empty()) result.message += "; redundant constraints there: " + redundant;
     }
-    state_ = std::move(start);
+    std::swap(state_, stepStart_);
     outputsCurrent_ = false;  // the workspace holds the failed trial, not the restored state
     return result;
   }

@@ -98,6 +98,7 @@ class Simulation {
   System system_;
   std::unique_ptr<TimeStepper> stepper_;
   IntegratorState state_;
+  IntegratorState stepStart_;  // of the communication step under way: restored if it fails
   std::vector<int> bodyIndex_, jointIndex_;  // scene order -> model order
   std::vector<Quat> orientation_;            // sign-continuous across steps: scene bodies, then mesh nodes
   VectorXd outputLambda_;  // multipliers of the evaluated outputs

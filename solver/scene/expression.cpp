@@ -182,7 +182,7 @@ double Expression::operator()(double variable) const {
           case Op::Subtract: a -= b; break;
           case Op::Multiply: a *= b; break;
           case Op::Divide: a /= b; break;
-          case Op::Power: a = std::pow(a, b); break;
+          case Op::Power: a = b == 2.0 ? a * a : std::pow(a, b); break;  // squares are the common case
           case Op::Min: a = std::min(a, b); break;
           case Op::Max: a = std::max(a, b); break;
           default: break;
