@@ -22,17 +22,61 @@ struct RateTerms {
   Vec3 velocity, angularVelocity, linearBias, angularBias;
 };
 
-RateTerms rateTerms(const JointMotion& m, const Vec3& parentVelocity, const Vec3& parentOmega, const Mat3& AP,
-                    const Mat3& AC, const Vec3& pC, const Vec3& dr, const Eigen::Ref<const VectorXd>& qdot) {
+// Hv, Hw: the joint's motion columns, qdot its rates (fixed-size blocks for a
+// single-rate joint, see forwardBody).
+template <class Columns, class Rates>
+RateTerms rateTerms(const JointMotion& m, const Columns& Hv, const Columns& Hw, const Vec3& parentVelocity,
+                    const Vec3& parentOmega, const Mat3& AP, const Mat3& AC, const Vec3& pC, const Vec3& dr,
+                    const Rates& qdot) {
   RateTerms t;
-  const Vec3 wRel = AC * (m.Hw * qdot);
-  const Vec3 vSlide = AP * (m.Hv * qdot);
+  const Vec3 wRel = AC * (Hw * qdot);
+  const Vec3 vSlide = AP * (Hv * qdot);
   t.angularVelocity = parentOmega + wRel;
   t.velocity = parentVelocity + parentOmega.cross(dr) + vSlide + pC.cross(wRel);
   t.angularBias = t.angularVelocity.cross(wRel) + AC * m.HwDotQdot;
   t.linearBias = parentOmega.cross(t.velocity - parentVelocity) + parentOmega.cross(vSlide) + AP * m.HvDotQdot +
                  t.angularVelocity.cross(pC).cross(wRel) + pC.cross(t.angularBias);
   return t;
+}
+
+// Body i of the forward recursion from its parent p. D is the joint's rate
+// count where it is known at compile time (1: revolute, prismatic; most
+// joints), Eigen::Dynamic otherwise: the same code, with the products on a
+// single rate unrolled (pendulum 0.54 -> 0.44 us per substep, double
+// pendulum 3.2 -> 2.5).
+template <int D>
+void forwardBody(const Joint& jt, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+                 const BodyKinematics& p, BodyKinematics& c, JointKinematics& jk) {
+  const int n = jt.dofs;
+  const auto qdot = v.template segment<D>(jt.velocityOffset, n);
+  const auto qddot = vdot.template segment<D>(jt.velocityOffset, n);
+  const JointMotion m = jointMotion(jt, q, qdot);
+  const auto Hv = m.Hv.template leftCols<D>(n);
+  const auto Hw = m.Hw.template leftCols<D>(n);
+
+  // Pose: parent marker P, child marker C = P * (d, R), body = C * childMarker^-1.
+  const Mat3 AP = p.orientation * jt.parentMarker.orientation;
+  const Mat3 AC = AP * m.rotation;
+  c.orientation = AC * jt.childMarker.orientation.transpose();
+  const Vec3 pC = c.orientation * jt.childMarker.position;  // centre of mass -> child marker
+  c.position = p.position + p.orientation * jt.parentMarker.position + AP * m.translation - pC;
+
+  // Motion subspace at the child's centre of mass, world frame.
+  jk.childMarkerOrientation = AC;
+  jk.childMarkerOffset = pC;
+  jk.motionSubspace.resize(6, n);
+  jk.motionSubspace.template bottomRows<3>() = AC * Hw;
+  jk.motionSubspace.template topRows<3>() = AP * Hv + skew(pC) * jk.motionSubspace.template bottomRows<3>();
+
+  // Velocities Y_j = X Y_i + S qdot; accelerations Ydot_j = X Ydot_i + S qddot + bias.
+  const Vec3 dr = c.position - p.position;
+  const RateTerms t = rateTerms(m, Hv, Hw, p.velocity, p.angularVelocity, AP, AC, pC, dr, qdot);
+  c.velocity = t.velocity;
+  c.angularVelocity = t.angularVelocity;
+  const Vec3 angularRel = AC * (Hw * qddot);
+  c.angularAcceleration = p.angularAcceleration + angularRel + t.angularBias;
+  c.acceleration = p.acceleration + p.angularAcceleration.cross(dr) + AP * (Hv * qddot) + pC.cross(angularRel) +
+                   t.linearBias;
 }
 
 }  // namespace
@@ -44,36 +88,10 @@ void forwardKinematics(const Model& model, Data& data, const Configuration& q, c
     const Body& b = model.bodies[i];
     const Joint& jt = model.joints[b.inboardJoint];
     const BodyKinematics& p = b.parent == kGroundIndex ? ground : data.body[b.parent];
-    BodyKinematics& c = data.body[i];
-    JointKinematics& jk = data.joint[b.inboardJoint];
-
-    const auto qdot = v.segment(jt.velocityOffset, jt.dofs);
-    const auto qddot = vdot.segment(jt.velocityOffset, jt.dofs);
-    const JointMotion m = jointMotion(jt, q, qdot);
-
-    // Pose: parent marker P, child marker C = P * (d, R), body = C * childMarker^-1.
-    const Mat3 AP = p.orientation * jt.parentMarker.orientation;
-    const Mat3 AC = AP * m.rotation;
-    c.orientation = AC * jt.childMarker.orientation.transpose();
-    const Vec3 pC = c.orientation * jt.childMarker.position;  // centre of mass -> child marker
-    c.position = p.position + p.orientation * jt.parentMarker.position + AP * m.translation - pC;
-
-    // Motion subspace at the child's centre of mass, world frame.
-    jk.childMarkerOrientation = AC;
-    jk.childMarkerOffset = pC;
-    jk.motionSubspace.resize(6, jt.dofs);
-    jk.motionSubspace.bottomRows<3>() = AC * m.Hw;
-    jk.motionSubspace.topRows<3>() = AP * m.Hv + skew(pC) * jk.motionSubspace.bottomRows<3>();
-
-    // Velocities Y_j = X Y_i + S qdot; accelerations Ydot_j = X Ydot_i + S qddot + bias.
-    const Vec3 dr = c.position - p.position;
-    const RateTerms t = rateTerms(m, p.velocity, p.angularVelocity, AP, AC, pC, dr, qdot);
-    c.velocity = t.velocity;
-    c.angularVelocity = t.angularVelocity;
-    const Vec3 angularRel = AC * (m.Hw * qddot);
-    c.angularAcceleration = p.angularAcceleration + angularRel + t.angularBias;
-    c.acceleration = p.acceleration + p.angularAcceleration.cross(dr) + AP * (m.Hv * qddot) + pC.cross(angularRel) +
-                     t.linearBias;
+    if (jt.dofs == 1)
+      forwardBody<1>(jt, q, v, vdot, p, data.body[i], data.joint[b.inboardJoint]);
+    else
+      forwardBody<Eigen::Dynamic>(jt, q, v, vdot, p, data.body[i], data.joint[b.inboardJoint]);
   }
 }
 
@@ -90,7 +108,8 @@ BiasRateDerivatives biasRateDerivatives(const Model& model, const Data& data, co
   const Vec3 dr = c.position - p.position;
   VectorXd qdot = v.segment(jt.velocityOffset, jt.dofs);
   auto bias = [&](const Vec3& parentVelocity, const Vec3& parentOmega, const VectorXd& rates) {
-    const RateTerms t = rateTerms(jointMotion(jt, q, rates), parentVelocity, parentOmega, AP, AC, pC, dr, rates);
+    const JointMotion m = jointMotion(jt, q, rates);
+    const RateTerms t = rateTerms(m, m.Hv, m.Hw, parentVelocity, parentOmega, AP, AC, pC, dr, rates);
     Vec6 out;
     out << t.linearBias, t.angularBias;
     return out;
