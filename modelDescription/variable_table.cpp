@@ -17,13 +17,6 @@ bool isAngle(const std::string& coordinate) {
          coordinate.rfind("rotation", 0) == 0;
 }
 
-bool selected(bool all, const std::vector<std::string>& names, const std::string& name) {
-  if (all) return true;
-  for (const auto& n : names)
-    if (n == name) return true;
-  return false;
-}
-
 class TableBuilder {
  public:
   void add(std::string name, Causality c, Variability v, std::string unit, std::string description, Quantity q,
@@ -157,7 +150,7 @@ std::vector<Variable> variableTable(const Scene& scene) {
   // Outputs: joints, then bodies, then flexible nodes and elements, as the scene selects.
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
-    if (jt.isVirtual || !selected(scene.outputs.allJoints, scene.outputs.joints, jt.name)) continue;
+    if (jt.isVirtual || !scene.outputs.exposesJoint(jt.name)) continue;
     const auto names = jt.cut ? std::vector<std::string>() : jointCoordinateNames(jt.type);
     for (int d = 0; d < int(names.size()); ++d) {
       const bool angular = isAngle(names[d]);
@@ -192,7 +185,7 @@ std::vector<Variable> variableTable(const Scene& scene) {
   }
   for (int b = 0; b < int(scene.bodies.size()); ++b) {
     const std::string& name = scene.bodies[b].name;
-    if (scene.bodies[b].isVirtual || !selected(scene.outputs.allBodies, scene.outputs.bodies, name)) continue;
+    if (scene.bodies[b].isVirtual || !scene.outputs.exposesBody(name)) continue;
     for (int c = 0; c < 3; ++c)
       t.output(name + ".position." + kAxes[c], "m", "body frame origin, world", {QK::BodyPosition, b, c});
     for (int c = 0; c < 4; ++c)
@@ -216,10 +209,7 @@ std::vector<Variable> variableTable(const Scene& scene) {
   for (std::size_t b = 0; b < scene.flexibleBodies.size(); ++b) {
     const FlexibleBodySpec& spec = scene.flexibleBodies[b];
     const FlexibleBody& fb = mesh.bodies[b];
-    std::vector<int> nodes = spec.outputNodes;
-    if (spec.allNodes)
-      for (int i = 0; i < fb.nodeCount; ++i) nodes.push_back(i);
-    for (int i : nodes) {
+    for (int i : spec.exposedNodes()) {
       const std::string name = spec.name + ".node" + std::to_string(i);
       const int n = fb.firstNode + i;
       for (int c = 0; c < 3; ++c)

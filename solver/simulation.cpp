@@ -45,6 +45,15 @@ Simulation::Simulation(const Scene& scene)
   for (const BodySpec& b : scene.bodies) bodyIndex_.push_back(findBody(model, b.name));
   for (const JointSpec& j : scene.joints) jointIndex_.push_back(findJoint(model, j.name));
   orientation_.assign(scene.bodies.size() + model.flexible.nodes.size(), Quat::Identity());
+  // Quaternions are kept sign-continuous only for what the outputs expose: a
+  // 1000-element beam that lists two nodes converts two matrices per step.
+  for (int b = 0; b < int(scene.bodies.size()); ++b)
+    if (!scene.bodies[b].isVirtual && scene.outputs.exposesBody(scene.bodies[b].name)) trackedOrientations_.push_back(b);
+  for (std::size_t f = 0; f < scene.flexibleBodies.size(); ++f)
+    for (int i : scene.flexibleBodies[f].exposedNodes())
+      trackedOrientations_.push_back(int(scene.bodies.size()) + model.flexible.bodies[f].firstNode + i);
+  orientationTracked_.assign(orientation_.size(), false);
+  for (const int i : trackedOrientations_) orientationTracked_[i] = true;
   state_.q = model.initialConfiguration;
   state_.v = model.initialVelocity;
 }
@@ -201,13 +210,26 @@ bool Simulation::startIntegrator(std::string& message) {
 // communication point (w >= 0 at the start).
 void Simulation::updateQuaternions(bool reset) {
   const std::size_t nb = bodyIndex_.size();
-  for (std::size_t i = 0; i < orientation_.size(); ++i) {
+  for (const int k : trackedOrientations_) {
+    const std::size_t i = std::size_t(k);
     const Mat3& A = i < nb ? system_.data().body[bodyIndex_[i]].orientation : system_.nodes()[i - nb].pose.A;
     Quat q(A);
     const double reference = reset ? q.w() : q.coeffs().dot(orientation_[i].coeffs());
     if (reference < 0.0) q.coeffs() *= -1.0;
     orientation_[i] = q;
   }
+}
+
+// Component (w, x, y, z) of orientation i (scene bodies, then mesh nodes):
+// the sign-continuous one where the outputs expose it, else A's with w >= 0.
+double Simulation::quaternion(std::size_t i, const Mat3& A, int component) const {
+  Quat o = orientation_[i];
+  if (!orientationTracked_[i]) {
+    o = Quat(A);
+    if (o.w() < 0.0) o.coeffs() *= -1.0;
+  }
+  const double wxyz[4] = {o.w(), o.x(), o.y(), o.z()};
+  return wxyz[component];
 }
 
 AdvanceResult Simulation::doStep(double H) {
@@ -341,11 +363,7 @@ double Simulation::read(const Quantity& q) {
     case QuantityKind::BodyPosition: return (k.position - comOffset)[q.component];
     case QuantityKind::BodyVelocity: return (k.velocity - k.angularVelocity.cross(comOffset))[q.component];
     case QuantityKind::BodyAngularVelocity: return k.angularVelocity[q.component];
-    case QuantityKind::BodyOrientation: {
-      const Quat& o = orientation_[q.index];
-      const double wxyz[4] = {o.w(), o.x(), o.y(), o.z()};
-      return wxyz[q.component];
-    }
+    case QuantityKind::BodyOrientation: return quaternion(q.index, k.orientation, q.component);
     default: return 0.0;
   }
 }
@@ -371,11 +389,7 @@ double Simulation::readFlexible(const Quantity& q) {
     case QuantityKind::NodePosition: return n.pose.r[q.component];
     case QuantityKind::NodeVelocity: return n.velocity.v[q.component];
     case QuantityKind::NodeAngularVelocity: return (n.pose.A * n.velocity.omega)[q.component];
-    case QuantityKind::NodeOrientation: {
-      const Quat& o = orientation_[bodyIndex_.size() + q.index];
-      const double wxyz[4] = {o.w(), o.x(), o.y(), o.z()};
-      return wxyz[q.component];
-    }
+    case QuantityKind::NodeOrientation: return quaternion(bodyIndex_.size() + q.index, n.pose.A, q.component);
     default: return 0.0;
   }
 }

@@ -85,6 +85,7 @@ class Simulation {
   void evaluateOutputs(bool reactions);
 
   void updateQuaternions(bool reset);
+  double quaternion(std::size_t i, const Mat3& A, int component) const;
   bool assembleConstraints(std::string& message, std::vector<std::string>* notes);
   std::string constraintOwner(int row) const;
   std::string constraintOwners(const std::vector<int>& rows) const;
@@ -98,6 +99,8 @@ class Simulation {
   System system_;
   std::unique_ptr<TimeStepper> stepper_;
   IntegratorState state_;
+  std::vector<int> trackedOrientations_;  // indices into orientation_ of the exposed bodies and nodes
+  std::vector<bool> orientationTracked_;  // the same as flags over orientation_
   IntegratorState stepStart_;  // of the communication step under way: restored if it fails
   std::vector<int> bodyIndex_, jointIndex_;  // scene order -> model order
   std::vector<Quat> orientation_;            // sign-continuous across steps: scene bodies, then mesh nodes

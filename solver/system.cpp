@@ -709,10 +709,16 @@ double System::flexibleBodyJointViolation(int k) const {
       .maxCoeff();
 }
 
+// What outputs read: the node states, and the tree's kinematics and subtree
+// wrenches (joint reactions). Not the elements' forces: section forces and
+// energies are computed where they are read, for the elements listed.
 void System::evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                       const VectorXd& lambda) {
-  VectorXd r, phi;
-  residual(t, q, v, vdot, lambda, r, phi);
+  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
+  if (!model_.bodies.empty()) {
+    VectorXd phi;
+    rigidResidual(t, q, v, vdot, lambda, rigid_, phi);
+  }
 }
 
 }  // namespace mfbd

@@ -144,6 +144,13 @@ struct FlexibleBodySpec {
   std::vector<NodalLoadSpec> loads;
   bool allNodes = false;          // outputs: every node, or those listed
   std::vector<int> outputNodes;
+  // The nodes exposed as outputs, in order (every node with allNodes).
+  std::vector<int> exposedNodes() const {
+    std::vector<int> out = outputNodes;
+    if (allNodes)
+      for (int i = 0; i < int(nodes.size()); ++i) out.push_back(i);
+    return out;
+  }
   std::vector<int> outputElements;
   bool outputEnergy = false;      // kinetic, strain and gravity potential energy
 };
@@ -198,6 +205,15 @@ struct OutputSelection {
   std::vector<std::string> bodies;
   bool allJoints = true;
   std::vector<std::string> joints;
+  bool exposesBody(const std::string& name) const { return allBodies || listed(bodies, name); }
+  bool exposesJoint(const std::string& name) const { return allJoints || listed(joints, name); }
+
+ private:
+  static bool listed(const std::vector<std::string>& names, const std::string& name) {
+    for (const auto& n : names)
+      if (n == name) return true;
+    return false;
+  }
 };
 
 // The default experiment the FMU advertises (fmpy and others use it).

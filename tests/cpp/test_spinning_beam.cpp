@@ -82,3 +82,38 @@ TEST(SpinningBeam, MillionStepsKeepOrientationsOrthogonalAndTheTurnCount) {
   EXPECT_LT(std::abs(turned - exact), 1e-8);
   EXPECT_LT((A - hub).norm(), 1e-8);
 }
+
+// Quaternion outputs: the exposed node's quaternion stays sign-continuous as
+// the beam turns (no jump between communication points, while w changes
+// sign with the turn); a node the scene does not list is not tracked at
+// each step, and reading it gives its orientation with w >= 0.
+TEST(SpinningBeam, ExposedQuaternionsAreContinuousOthersStillReadable) {
+  std::string text = spinningBeamScene();
+  const std::string anchor = R"("supports")";
+  text.insert(text.find(anchor), R"("outputs": {"nodes": [2]}, )");
+  Simulation sim(parseScene(text));
+  std::string message;
+  ASSERT_TRUE(sim.initialize(0.0, message)) << message;
+  auto component = [&](int node, int c) { return sim.read({QuantityKind::NodeOrientation, node, c}); };
+  auto quaternion = [&](int node) {
+    return Eigen::Vector4d(component(node, 0), component(node, 1), component(node, 2), component(node, 3));
+  };
+  Eigen::Vector4d previous = quaternion(2);
+  double largestJump = 0.0, smallestW = 1.0;
+  for (int k = 0; k < 100; ++k) {  // 2 s: 6.4 turns of 0.2 rad per communication step
+    ASSERT_TRUE(sim.doStep(0.01).ok);
+    const Eigen::Vector4d now = quaternion(2);
+    largestJump = std::max(largestJump, (now - previous).norm());
+    smallestW = std::min(smallestW, now[0]);
+    previous = now;
+    const Eigen::Quaterniond middle(sim.system().nodes()[1].pose.A);
+    const double sign = middle.w() < 0.0 ? -1.0 : 1.0;
+    EXPECT_NEAR(component(1, 0), sign * middle.w(), 1e-15);
+    EXPECT_NEAR(component(1, 3), sign * middle.z(), 1e-15);
+    EXPECT_GE(component(1, 0), 0.0);
+  }
+  EXPECT_LT(smallestW, -0.99);      // the exposed quaternion went through w = -1: no re-signing
+  // Half the turn of a step (0.2 rad, more in the start transient) apart at
+  // most; a re-signed quaternion would jump by about 2.
+  EXPECT_LT(largestJump, 0.5);
+}
