@@ -68,7 +68,7 @@ class GeneralizedAlpha : public TimeStepper {
   LinearSolver solver_;
   double factoredStep_ = 0.0;  // substep size of the current factorization; 0 = none
   double correctionNoise_ = 0.0;  // of the current factorization (constraintNoise)
-  Configuration factoredAt_;
+  Configuration factoredAt_;  // configuration of the current factorization (turnWithRotations)
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
   // Substeps still to start with a fresh matrix after an earlier
@@ -79,9 +79,9 @@ class GeneralizedAlpha : public TimeStepper {
   // every kFreshStarts + 1 substeps the kept matrix is tried again.
   int freshStarts_ = 0;
   static constexpr int kFreshStarts = 4;
-  double lastIterations_ = 1e9;
+  double lastIterations_ = 1e9;  // Newton iterations of the last accepted substep (none yet: many)
   double substepsSinceFactorization_ = 0.0;  // accepted since the current factorization
-  double firstRate_ = 0.0;  // contraction at the first check of the last substep with a kept matrix  // Newton iterations of the last accepted substep (none yet: many)
+  double firstRate_ = 0.0;  // contraction at the first check of the last substep with a kept matrix
 };
 
 }  // namespace mfbd
