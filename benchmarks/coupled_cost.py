@@ -35,11 +35,10 @@ each scene's points). A study, not a test:
 nothing here asserts a time.
 """
 import argparse
-import pathlib
 
 import numpy as np
 
-from flexible_cost import ROOT, compile_benchmark, run, write_csv
+from flexible_cost import compile_benchmark, cost_arguments, run, write_csv
 
 SCENES = ["cantilever", "driven", "hub", "coupled"]
 LABELS = {"cantilever": "clamped cantilever, tip pulse (no rigid body)",
@@ -82,18 +81,8 @@ def plot(rows, path):
 
 
 def main():
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--elements", type=int, nargs="+", default=[10, 20, 50, 100, 200, 500, 1000, 2000])
-    p.add_argument("--duration", type=float, default=0.2, help="simulated time per run [s]")
-    p.add_argument("--h", type=float, default=1e-3, help="implicit substep (scene h_max) [s]")
-    p.add_argument("--communication", type=float, default=0.01, help="doStep size [s]")
-    p.add_argument("--min-time", type=float, default=0.3, help="repeat each N until this much wall time [s]")
-    p.add_argument("--phases", action="store_true", help="also time the parts of one Newton iteration")
-    p.add_argument("--phases-elements", type=int, nargs="+", default=[100, 1000])
-    p.add_argument("--build", type=pathlib.Path, default=ROOT / "build")
-    p.add_argument("--out", type=pathlib.Path, default=ROOT / "benchmarks" / "results")
-    args = p.parse_args()
-    args.out.mkdir(parents=True, exist_ok=True)
+    args = cost_arguments(__doc__, min_time=0.3,
+                          extra=[(("--phases-elements",), dict(type=int, nargs="+", default=[100, 1000]))])
 
     binary = compile_benchmark(args.build, "flexible_cost")
     rows = []

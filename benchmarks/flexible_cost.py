@@ -89,18 +89,29 @@ def plot(rows, path):
     print(f"wrote {path}")
 
 
-def main():
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def cost_arguments(doc, min_time, extra=()):
+    """The command line of the cost studies (this one and coupled_cost.py):
+    element counts, run length, substep, doStep, repeats, --phases, build and
+    output folders; `extra` adds (flags, keyword arguments) pairs. The output
+    folder is created."""
+    p = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--elements", type=int, nargs="+", default=[10, 20, 50, 100, 200, 500, 1000, 2000])
     p.add_argument("--duration", type=float, default=0.2, help="simulated time per run [s]")
     p.add_argument("--h", type=float, default=1e-3, help="implicit substep (scene h_max) [s]")
     p.add_argument("--communication", type=float, default=0.01, help="doStep size [s]")
-    p.add_argument("--min-time", type=float, default=1.0, help="repeat each N until this much wall time [s]")
+    p.add_argument("--min-time", type=float, default=min_time, help="repeat each N until this much wall time [s]")
     p.add_argument("--phases", action="store_true", help="also time the parts of one Newton iteration")
+    for flags, options in extra:
+        p.add_argument(*flags, **options)
     p.add_argument("--build", type=pathlib.Path, default=ROOT / "build")
     p.add_argument("--out", type=pathlib.Path, default=ROOT / "benchmarks" / "results")
     args = p.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
+    return args
+
+
+def main():
+    args = cost_arguments(__doc__, min_time=1.0)
 
     rows = run(compile_benchmark(args.build, "flexible_cost"), args, ["--min-time", str(args.min_time)])
     header = ["elements", "us_per_step", "us_per_element_step", "newton_iterations_per_step",
