@@ -249,6 +249,10 @@ bool Instance::checkValue(const Variable& v, double value, std::string& why) con
       if (value >= 0.0 && value <= 1.0) return true;
       why = "expected a spectral radius in [0, 1]";
       return false;
+    case QuantityKind::NewtonTolerance:
+      if (value > 0.0) return true;
+      why = "expected a Newton tolerance > 0";
+      return false;
     case QuantityKind::JointDamping:
     case QuantityKind::FlexibleDamping:
       if (value >= 0.0) return true;

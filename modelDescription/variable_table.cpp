@@ -71,6 +71,8 @@ std::vector<Variable> variableTable(const Scene& scene) {
   t.add("solver.h_max", P, F, "s", "largest implicit substep", {QK::StepSizeMax}, scene.solver.hMax);
   t.add("solver.rho_inf", P, F, "", "generalized-alpha spectral radius at infinity", {QK::SpectralRadius},
         scene.solver.rhoInf);
+  t.add("solver.tolerance", P, F, "", "Newton: largest position error left after the last correction (m, rad)",
+        {QK::NewtonTolerance}, scene.solver.tolerance);
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
     if (jointDofs(jt.type) == 0 || jt.cut || jt.isVirtual) continue;

@@ -19,6 +19,7 @@ void setSceneParameter(Scene& scene, const Quantity& q, double value) {
     case QuantityKind::Gravity: scene.gravity[q.component] = value; break;
     case QuantityKind::StepSizeMax: scene.solver.hMax = value; break;
     case QuantityKind::SpectralRadius: scene.solver.rhoInf = value; break;
+    case QuantityKind::NewtonTolerance: scene.solver.tolerance = value; break;
     case QuantityKind::JointDamping: scene.joints[q.index].damping = value; break;
     case QuantityKind::FlexibleDamping: scene.flexibleBodies[q.index].damping = value; break;
     default: break;
@@ -31,6 +32,7 @@ double sceneParameter(const Scene& scene, const Quantity& q) {
     case QuantityKind::Gravity: return scene.gravity[q.component];
     case QuantityKind::StepSizeMax: return scene.solver.hMax;
     case QuantityKind::SpectralRadius: return scene.solver.rhoInf;
+    case QuantityKind::NewtonTolerance: return scene.solver.tolerance;
     case QuantityKind::JointDamping: return scene.joints[q.index].damping;
     case QuantityKind::FlexibleDamping: return scene.flexibleBodies[q.index].damping;
     default: return 0.0;
@@ -307,7 +309,8 @@ double Simulation::read(const Quantity& q) {
     case QuantityKind::UserParameter:
     case QuantityKind::Gravity:
     case QuantityKind::StepSizeMax:
-    case QuantityKind::SpectralRadius: return sceneParameter(scene_, q);
+    case QuantityKind::SpectralRadius:
+    case QuantityKind::NewtonTolerance: return sceneParameter(scene_, q);
     case QuantityKind::JointDamping: return model.joints[jointIndex_[q.index]].damping;
     case QuantityKind::JointForceInput:
     case QuantityKind::JointDriveRate: {

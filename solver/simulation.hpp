@@ -15,6 +15,7 @@ enum class QuantityKind {
   Gravity,          // component 0..2                            (fixed)
   StepSizeMax,      //                                           (fixed)
   SpectralRadius,   //                                           (fixed)
+  NewtonTolerance,  // position error left by Newton (m, rad)     (fixed)
   JointDamping,     // index: joint                              (tunable)
   JointForceInput,  // index: joint, component: DOF              (input)
   JointDriveRate,   // index: joint; rate of a rate-input drive  (input)
