@@ -64,7 +64,7 @@ def metrics(p, v, w, angle):
 
 
 def ours(fmu, h):
-    run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF})
+    run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF, "solver.tolerance": EXUDYN_TOLERANCE})
     names = [f"bar{i}.{q}.{c}" for i in (1, 2) for q in ("position", "velocity") for c in "xy"]
     names += ["bar1.angular_velocity.z", "bar2.angular_velocity.z", "shoulder.angle", "elbow.angle"]
     s, wall, statistics = run.sample(names, STOP, OUTPUT)

@@ -100,7 +100,7 @@ def metrics(p, v, R, w):
 
 
 def ours(fmu, h):
-    run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF})
+    run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF, "solver.tolerance": EXUDYN_TOLERANCE})
     rods = [f"rod{i}" for i in range(1, 6)]
     names = [f"{b}.{q}.{c}" for b in rods for q in ("position", "velocity", "angular_velocity") for c in "xyz"]
     names += [f"{b}.orientation.{c}" for b in rods for c in "xyzw"]
