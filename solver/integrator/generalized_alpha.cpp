@@ -218,20 +218,13 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     // correction of 1e-13 leaves ~1e-19, and a further iteration would only
     // correct round-off. Under quadratic (fresh-matrix) convergence rho
     // falls from one iteration to the next, so the estimate is pessimistic.
-    // The first correction has no rate of its own: with the matrix the last
-    // substep measured one for, that one (Hairer & Wanner's RADAU5 does
-    // the same), at most kEarlyStops substeps in a row before a substep
-    // measures again (the cantilever of the cost study at tolerance 1e-12:
-    // 2 -> 1.26 corrections per substep).
-    const double rho = k > 0 ? size / previous : withFreshMatrix < 0 ? lastRate_ : 1.0;
+    const double rho = k > 0 ? size / previous : 1.0;
     if (k == 1 && withFreshMatrix < 0) firstRate_ = rho;
     const double remaining = rho < 1.0 ? rho / (1.0 - rho) * size : HUGE_VAL;
     const double floor = std::max({0.01 * options_.tolerance, coordinateFloor, 4.0 * correctionNoise_});
     const bool small = size <= floor || remaining <= options_.tolerance;
     if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= std::max(options_.tolerance, phiFloor))) {
       lastIterations_ = k + 1;
-      if (withFreshMatrix >= 0 || (k == 0 && ++earlyStops_ >= kEarlyStops)) lastRate_ = 1.0;
-      else if (k > 0) lastRate_ = rho, earlyStops_ = 0;
       substepsSinceFactorization_ += 1.0;
       trial.substeps = s.substeps + 1;
       trial.newtonIterations = s.newtonIterations;

@@ -80,11 +80,6 @@ class GeneralizedAlpha : public TimeStepper {
   int freshStarts_ = 0;
   static constexpr int kFreshStarts = 4;
   double lastIterations_ = 1e9;  // Newton iterations of the last accepted substep (none yet: many)
-  // Contraction rate the last substep measured with the kept matrix (1:
-  // none), for a stop after one correction; such stops in a row.
-  double lastRate_ = 1.0;
-  int earlyStops_ = 0;
-  static constexpr int kEarlyStops = 3;
   double substepsSinceFactorization_ = 0.0;  // accepted since the current factorization
   double firstRate_ = 0.0;  // contraction at the first check of the last substep with a kept matrix
 };

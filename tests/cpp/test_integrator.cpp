@@ -179,26 +179,9 @@ TEST(GeneralizedAlpha, IterationMatrixIsKeptAcrossCommunicationPointsWhenItPays)
   for (int k = 0; k < 20; ++k) ASSERT_TRUE(stepped.doStep(0.01).ok);
   ASSERT_TRUE(once.doStep(0.2).ok);
   EXPECT_EQ(stepped.state().substeps, 200);
-  // Two corrections a substep, one where the first is already below the
-  // tolerance at the rate the substep before measured (measured: 3 of 200).
-  EXPECT_LE(stepped.state().newtonIterations, 400);
-  EXPECT_GE(stepped.state().newtonIterations, 390);
+  EXPECT_EQ(stepped.state().newtonIterations, 400);
   EXPECT_EQ(stepped.state().factorizations, 1);
   EXPECT_LT((stepped.state().q.scalars - once.state().q.scalars).cwiseAbs().maxCoeff(), 1e-12);
-
-  // At a tolerance of 1e-12 (first corrections ~1e-7 at a rate ~1e-6) most
-  // substeps stop after one correction, and the motion stays within the
-  // tolerances of the run at the default 1e-14.
-  Scene loose = parseScene(beam);
-  loose.solver.tolerance = 1e-12;
-  Simulation quick(loose);
-  ASSERT_TRUE(quick.initialize(0.0, message));
-  for (int k = 0; k < 20; ++k) ASSERT_TRUE(quick.doStep(0.01).ok);
-  std::printf("tolerance 1e-12: %ld corrections in %ld substeps\n", quick.state().newtonIterations,
-              quick.state().substeps);
-  EXPECT_LT(quick.state().newtonIterations, 1.4 * 200);
-  std::printf("difference %.2e\n", (quick.state().q.scalars - stepped.state().q.scalars).cwiseAbs().maxCoeff());
-  EXPECT_LT((quick.state().q.scalars - stepped.state().q.scalars).cwiseAbs().maxCoeff(), 1e-11);
 
   const Scene pendulum = doublePendulum(1e-3);
   Simulation swinging(pendulum);
