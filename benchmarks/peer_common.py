@@ -53,7 +53,8 @@ class FmuRun:
     logging, status checks) would add about 2 us of Python per call, 5 ms
     of 10 ms in F3 at n = 2 (1,000 doSteps and reads). Solver statistics
     come from the `logStatistics` line that fmi2Terminate writes (no log
-    callback into Python at every step)."""
+    callback into Python at every step). The Newton tolerance is
+    NEWTON_TOLERANCE (Exudyn's) unless `parameters` sets solver.tolerance."""
 
     def __init__(self, fmu, parameters=None):
         parameters = {"solver.tolerance": NEWTON_TOLERANCE, **(parameters or {})}

@@ -222,13 +222,8 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
 void System::residual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                       const VectorXd& lambda, VectorXd& r, VectorXd& phi) {
   r.setZero(model_.velocityCount);
-  phi.resize(0);
-  // Nodes first: the flexible body joints of the rigid part read them.
-  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
-  if (!model_.bodies.empty()) {
-    rigidResidual(t, q, v, vdot, lambda, rigid_, phi);
-    r.head(model_.rigidVelocityCount) = rigid_;
-  }
+  nodesAndTree(t, q, v, vdot, lambda, phi);
+  if (!model_.bodies.empty()) r.head(model_.rigidVelocityCount) = rigid_;
   if (!model_.flexible.empty()) {
     const bool inertia = model_.analysis == Analysis::Dynamic;
     if (!flexibleResidual(model_.flexible, nodes_, model_.gravity, flexibleInputs_, t, inertia, r))
@@ -714,11 +709,17 @@ double System::flexibleBodyJointViolation(int k) const {
 // energies are computed where they are read, for the elements listed.
 void System::evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                       const VectorXd& lambda) {
+  VectorXd phi;
+  nodesAndTree(t, q, v, vdot, lambda, phi);
+}
+
+// Node states, then the tree's residual into rigid_ and the constraints into
+// phi (nodes first: the flexible body joints of the rigid part read them).
+void System::nodesAndTree(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+                          const VectorXd& lambda, VectorXd& phi) {
+  phi.resize(0);
   if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
-  if (!model_.bodies.empty()) {
-    VectorXd phi;
-    rigidResidual(t, q, v, vdot, lambda, rigid_, phi);
-  }
+  if (!model_.bodies.empty()) rigidResidual(t, q, v, vdot, lambda, rigid_, phi);
 }
 
 }  // namespace mfbd

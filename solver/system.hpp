@@ -72,6 +72,8 @@ class System : public Dynamics {
   void evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda);
 
  private:
+  void nodesAndTree(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+                    const VectorXd& lambda, VectorXd& phi);
   void rigidResidual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                      const VectorXd& lambda, VectorXd& r, VectorXd& phi);
   void rigidTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
