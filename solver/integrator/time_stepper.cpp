@@ -104,6 +104,7 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
     const double step = remaining / std::max(1.0, std::ceil(remaining / h * (1.0 - 1e-9)));
     std::string why;
     if (substep(system, s, step, why)) {
+      restoreOrthogonality(s.q);
       if (++successes >= 2 && h < options_.hMax) {
         h = std::min(2.0 * h, options_.hMax);
         successes = 0;

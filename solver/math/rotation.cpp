@@ -27,24 +27,27 @@ struct ExpCoefficients {
   double c;  // (t - sin t)/t^3
 };
 
-ExpCoefficients expCoefficients(double t) {
-  const double t2 = t * t;
-  if (t < 0.2) {
-    // Taylor series to t^10: the first omitted term is below 1e-18 relative
-    // for t < 0.2 (no sin/cos: the small increments of every retraction),
-    // and more accurate than the closed forms, which cancel as t -> 0.
+// From the squared angle: the series need no square root, and small
+// increments (every Newton correction) need few terms.
+inline ExpCoefficients expCoefficients(double t2) {
+  if (t2 < 0.04) {
+    // Taylor series in t^2 (no sin/cos), more accurate than the closed
+    // forms, which cancel as t -> 0. Up to t^10 for t < 0.2, up to t^6 for
+    // t < 0.01: the first omitted term is below 1e-18 relative either way.
     static constexpr double a[6] = {1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0};
     static constexpr double b[6] = {1.0 / 2.0, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0,
                                     -1.0 / 479001600.0};
     static constexpr double c[6] = {1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0,
                                     -1.0 / 6227020800.0};
-    auto series = [t2](const double* k) {  // sum_n k_n t^2n, Horner
-      double sum = k[5];
-      for (int n = 4; n >= 0; --n) sum = sum * t2 + k[n];
+    const int last = t2 < 1e-4 ? 3 : 5;
+    auto series = [t2, last](const double* k) {  // sum_n k_n t^2n, Horner
+      double sum = k[last];
+      for (int n = last - 1; n >= 0; --n) sum = sum * t2 + k[n];
       return sum;
     };
     return {series(a), series(b), series(c)};
   }
+  const double t = std::sqrt(t2);
   const double s = std::sin(t), c = std::cos(t);
   return {s / t, (1.0 - c) / t2, (t - s) / (t2 * t)};
 }
@@ -52,7 +55,7 @@ ExpCoefficients expCoefficients(double t) {
 
 Mat3 expSO3(const Vec3& theta) {
   const double t2 = theta.squaredNorm();
-  const ExpCoefficients k = expCoefficients(std::sqrt(t2));
+  const ExpCoefficients k = expCoefficients(t2);
   // I + a S + b S^2 with S^2 = theta theta^T - t^2 I (no 3 x 3 product).
   Mat3 E = (k.b * theta) * theta.transpose();
   E.diagonal().array() += 1.0 - k.b * t2;
@@ -98,7 +101,7 @@ Vec3 logSO3(const Mat3& R) {
 }
 
 Mat3 tangentSO3(const Vec3& theta) {
-  const ExpCoefficients k = expCoefficients(theta.norm());
+  const ExpCoefficients k = expCoefficients(theta.squaredNorm());
   const Mat3 S = skew(theta);
   return Mat3::Identity() - k.b * S + k.c * S * S;
 }
@@ -116,10 +119,7 @@ Mat3 tangentSO3Inverse(const Vec3& theta) {
   return Mat3::Identity() + 0.5 * S + e * S * S;
 }
 
-Mat3 rotateIncrementally(const Mat3& R, const Vec3& theta) {
-  const Mat3 Rn = R * expSO3(theta);
-  return 0.5 * Rn * (3.0 * Mat3::Identity() - Rn.transpose() * Rn);
-}
+Mat3 polarStep(const Mat3& R) { return 0.5 * R * (3.0 * Mat3::Identity() - R.transpose() * R); }
 
 Mat3 nearestRotation(const Mat3& M) {
   Eigen::JacobiSVD<Mat3> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);

@@ -29,12 +29,12 @@ Mat3 tangentSO3(const Vec3& theta);
 // Its inverse, thetadot = T^-1(theta) omega.
 Mat3 tangentSO3Inverse(const Vec3& theta);
 
-// The incremental rotation update R exp(theta) of the solver's state. The
-// exact map alone keeps R orthogonal only up to accumulated round-off (about
-// 1e-10 after 1e6 updates); one Newton step towards the polar factor,
-// R <- R (3I - R^T R)/2, removes that drift at O(eps) cost and leaves the
-// rotation unchanged to first order.
-Mat3 rotateIncrementally(const Mat3& R, const Vec3& theta);
+// One Newton step towards the polar factor, R (3I - R^T R)/2: it leaves a
+// rotation unchanged to first order in its error. The state's rotations are
+// updated by the exact map, R exp(theta), which keeps them orthogonal only
+// up to accumulated round-off (about 1e-10 after 1e6 updates); this step
+// once per accepted time step (restoreOrthogonality) removes that drift.
+Mat3 polarStep(const Mat3& R);
 
 // Re-orthonormalise a rotation matrix (polar decomposition by SVD); used only
 // on data coming from outside (scene orientations), never on solver state.

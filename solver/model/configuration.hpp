@@ -28,8 +28,13 @@ struct CoordinateBlock {
 };
 
 // q <- q o exp(dq): the exact exponential map on each rotation block.
+// Newton iterates are retracted many times per step; the polar correction
+// of round-off is left to restoreOrthogonality, once per accepted step.
 void retract(const std::vector<CoordinateBlock>& blocks, Configuration& q, const VectorXd& dq);
 // One block of it: q's block b <- b o exp(dq), dq the block's own rates.
 void retractBlock(const CoordinateBlock& b, Configuration& q, const Eigen::Ref<const VectorXd>& dq);
+// Every stored rotation <- polarStep(rotation): keeps them orthogonal to
+// round-off over any number of steps.
+void restoreOrthogonality(Configuration& q);
 
 }  // namespace mfbd
