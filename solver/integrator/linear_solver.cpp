@@ -5,6 +5,8 @@
 #include <Eigen/Dense>
 #include <klu.h>
 
+#include "integrator/block_tridiagonal.hpp"
+
 namespace mfbd {
 
 bool SparseAssembly::assign(int size, const std::vector<Eigen::Triplet<double>>& triplets) {
@@ -112,6 +114,10 @@ struct LinearSolver::Impl {
   // solver (state saving) re-analyses lazily.
   std::unique_ptr<KluFactors> klu;
   bool analyzed = false;
+  // A beam line's block-tridiagonal matrix: block LU (blockTridiagonal),
+  // KLU for a factorization it refuses (factoredByBlocks false).
+  BlockTridiagonal blocks;
+  bool blockTridiagonal = false, factoredByBlocks = false;
 };
 
 LinearSolver::LinearSolver() : impl_(std::make_unique<Impl>()) {}
@@ -129,15 +135,23 @@ LinearSolver& LinearSolver::operator=(const LinearSolver& other) {
 bool LinearSolver::usesSparse() const { return impl_->sparse; }
 
 void LinearSolver::analyzePattern(const SparseMatrix& A, const std::vector<std::pair<int, int>>& pivotOrder) {
-  // Dense LU also for a matrix that is dense anyway (joint coordinates of a
-  // long closed chain: B^T M B and Phi_q B fill it), where KLU's sparse
-  // kernel is slower.
+  // Block LU for a block-tridiagonal matrix of any size (a beam line; also
+  // faster than dense LU on a short one). Dense LU for a small matrix and
+  // for one that is dense anyway (joint coordinates of a long closed chain:
+  // B^T M B and Phi_q B fill it), where KLU's sparse kernel is slower.
   const double size = double(A.rows());
   if (&pivotOrder != &impl_->pivotOrder) impl_->pivotOrder = pivotOrder;
   impl_->ordered = !pivotOrder.empty();
-  impl_->sparse = impl_->ordered ||
+  impl_->klu.reset();
+  impl_->blockTridiagonal = !impl_->ordered && impl_->blocks.analyze(A);
+  impl_->factoredByBlocks = false;
+  impl_->sparse = impl_->ordered || impl_->blockTridiagonal ||
                   (A.rows() > kDenseThreshold && !(A.rows() <= kDenseMaximum && A.nonZeros() > 0.2 * size * size));
   if (!impl_->sparse) return;
+  if (impl_->blockTridiagonal) {
+    impl_->analyzed = true;
+    return;
+  }
   impl_->klu = std::make_unique<KluFactors>();
   if (impl_->ordered) {
     const int n = int(A.rows());
@@ -164,6 +178,14 @@ LinearSolver::Status LinearSolver::factorize(const SparseMatrix& A) {
   if (impl_->sparse) {
     if (!impl_->analyzed) analyzePattern(A, impl_->pivotOrder);
     if (!impl_->analyzed) return Status::Singular;
+    if (impl_->blockTridiagonal) {
+      impl_->factoredByBlocks = impl_->blocks.factorize(A);
+      if (impl_->factoredByBlocks) return Status::Ok;
+      if (!impl_->klu) {
+        impl_->klu = std::make_unique<KluFactors>();
+        if (!impl_->klu->analyze(A, false)) return Status::Singular;
+      }
+    }
     if (impl_->ordered) {
       impl_->permuted = impl_->rows * A * impl_->columns.transpose();
       return impl_->klu->factorize(impl_->permuted) ? Status::Ok : Status::Singular;
@@ -190,7 +212,9 @@ Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) const {
 }
 
 void LinearSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
-  if (impl_->sparse && impl_->ordered)
+  if (impl_->sparse && impl_->factoredByBlocks)
+    impl_->blocks.solve(b, x);
+  else if (impl_->sparse && impl_->ordered)
     x = impl_->columns.transpose() * impl_->klu->solve(impl_->rows * b);
   else if (impl_->sparse)
     x = impl_->klu->solve(b);
