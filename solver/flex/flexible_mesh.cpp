@@ -116,10 +116,18 @@ void scatter(const FlexNode& a, const FlexNode& b, const Mat6& B, Triplets& out)
 
 }  // namespace
 
+namespace {
+// Whether the element's consistent mass acts: in dynamics, or in statics
+// under gravity (its weight); a static study without gravity skips it.
+bool carriesMass(const FlexElement& e, const Vec3& gravity, bool withInertia) {
+  return e.mass > 0.0 && (withInertia || gravity != Vec3::Zero());
+}
+}  // namespace
+
 bool elementForce(const FlexElement& e, const NodeState& s1, const NodeState& s2, const Vec3& gravity,
                   bool withInertia, Vec12& f) {
   if (!internalForceVector(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping, f)) return false;
-  if (e.mass > 0.0) {
+  if (carriesMass(e, gravity, withInertia)) {
     if (withInertia) {
       f += consistentInertiaForce(e.beam, e.mass, s1.pose, s1.velocity, s1.acceleration, s2.pose, s2.velocity,
                                   s2.acceleration, gravity);
@@ -165,7 +173,7 @@ void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nod
       const BeamForces f = internalForces(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping);
       S = cK * f.K + cC * f.C;
     }
-    if (e.mass > 0.0) {
+    if (carriesMass(e, gravity, withInertia)) {
       // Statics: the consistent weight's K alone (cM = cC = 0).
       S += withInertia ? consistentInertia(e.beam, e.mass, s1.pose, s1.velocity, s1.acceleration, s2.pose,
                                            s2.velocity, s2.acceleration, gravity, cM, cC, cK).S

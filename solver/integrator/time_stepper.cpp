@@ -14,15 +14,14 @@ int TimeStepper::newtonSize(const Dynamics& system, double cM) {
 
 namespace {
 // A system index (velocities, then auxiliary unknowns) in the Newton matrix,
-// where the m multipliers sit between the two.
-int newtonIndex(const Dynamics& system, int index) {
-  return index < system.velocityCount() ? index : index + system.constraintCount();
-}
+// where the m multipliers sit between the two (n velocities).
+int newtonIndex(int n, int m, int index) { return index < n ? index : index + m; }
 }  // namespace
 
 std::vector<std::pair<int, int>> TimeStepper::pivotOrder(const Dynamics& system, double cM) {
+  const int n = system.velocityCount(), m = system.constraintCount();
   std::vector<std::pair<int, int>> order = system.pivotOrder(cM);
-  for (auto& [row, column] : order) row = newtonIndex(system, row), column = newtonIndex(system, column);
+  for (auto& [row, column] : order) row = newtonIndex(n, m, row), column = newtonIndex(n, m, column);
   return order;
 }
 
@@ -32,8 +31,9 @@ void TimeStepper::iterationTriplets(Dynamics& system, const IntegratorState& at,
   all.clear();
   jacobian.clear();
   system.tangent(at.t, at.q, at.v, at.vdot, at.lambda, cM, cC, cK, all, jacobian);
-  auto place = [&](int index) { return newtonIndex(system, index); };
-  for (auto& t : all) t = Eigen::Triplet<double>(place(t.row()), place(t.col()), t.value());
+  auto place = [n, m](int index) { return newtonIndex(n, m, index); };
+  if (m > 0)
+    for (auto& t : all) t = Eigen::Triplet<double>(place(t.row()), place(t.col()), t.value());
   all.reserve(all.size() + 2 * jacobian.size() + n + m);
   for (const auto& t : jacobian) {
     all.emplace_back(n + t.row(), place(t.col()), t.value());
