@@ -427,21 +427,44 @@ Vec7 localElasticForce(const CorotationalBeam& beam, const Vec7& e) {
   return f;
 }
 
-Mat7 localTangentExcess(const CorotationalBeam& beam, const Vec7& e) {
-  Vec7 g;
-  const double q = archStrain(e, g);
-  const double EA = beam.section.EA, L0 = beam.L0, N = EA * (e[0] / L0 + q);
-  // d/de of [N; K_l e + N L0 g] minus K_l: eps's gradient is [1/L0; g].
-  Vec7 gradient = g;
-  gradient[0] = 1.0 / L0;
-  Mat7 D = (EA * L0) * gradient * gradient.transpose();
-  D(0, 0) = 0.0;  // EA / L0, already in K_l
+namespace {
+
+// K_t - K_l in its two parts: the arch strain's gradient, EA L0 (grad grad^T)
+// with grad = [1/L0; g] (less EA/L0 at (0, 0), already in K_l), and the
+// bowing's geometric stiffness N L0/30 [4 -1; -1 4] on each bending pair.
+struct ArchTangent {
+  Vec7 gradient;
+  double EAL0 = 0.0, NL0 = 0.0;
+};
+
+ArchTangent archTangent(const CorotationalBeam& beam, const Vec7& e) {
+  ArchTangent a;
+  const double q = archStrain(e, a.gradient);
+  const double EA = beam.section.EA, L0 = beam.L0;
+  a.gradient[0] = 1.0 / L0;
+  a.EAL0 = EA * L0;
+  a.NL0 = EA * (e[0] / L0 + q) * L0;
+  return a;
+}
+
+// K += the bowing's N L0/30 [4 -1; -1 4] on the pairs (a, a + 3), a = 2, 3:
+// the same pairs as K_l's, so K_l plus it stays in localStiffnessTimes' form.
+void addBowingStiffness(double NL0, Mat7& K) {
   for (int a = 2; a <= 3; ++a) {
-    D(a, a) += N * L0 * 4.0 / 30.0;
-    D(a + 3, a + 3) += N * L0 * 4.0 / 30.0;
-    D(a, a + 3) -= N * L0 / 30.0;
-    D(a + 3, a) -= N * L0 / 30.0;
+    K(a, a) += NL0 * 4.0 / 30.0;
+    K(a + 3, a + 3) += NL0 * 4.0 / 30.0;
+    K(a, a + 3) -= NL0 / 30.0;
+    K(a + 3, a) -= NL0 / 30.0;
   }
+}
+
+}  // namespace
+
+Mat7 localTangentExcess(const CorotationalBeam& beam, const Vec7& e) {
+  const ArchTangent a = archTangent(beam, e);
+  Mat7 D = a.EAL0 * a.gradient * a.gradient.transpose();
+  D(0, 0) = 0.0;  // EA / L0, already in K_l
+  addBowingStiffness(a.NL0, D);
   return D;
 }
 
@@ -628,12 +651,23 @@ BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
     return out;
   }
   tangentMaps(beam, k);
-  // Small products: coefficient-wise (lazyProduct), not Eigen's blocked GEMM.
-  const Eigen::Matrix<double, 12, 7> BtKl = localStiffnessTimes(beam.localStiffness, k.B).transpose();
-  out.K = BtKl.lazyProduct(k.B);
-  out.C = dampingBeta * out.K;
-  const Mat7x12 excessB = localTangentExcess(beam, localDeformationVector(k)).lazyProduct(k.B);
-  out.K += k.B.transpose().lazyProduct(excessB);
+  // B^T K_t B with K_t = K_l + localTangentExcess taken apart (ArchTangent):
+  // the bowing joins K_l's sparse pairs, the gradient part is a rank-one
+  // update less the axial entry K_l already has. Small products:
+  // coefficient-wise (lazyProduct), not Eigen's blocked GEMM.
+  const ArchTangent arch = archTangent(beam, localDeformationVector(k));
+  Mat7 pairs = beam.localStiffness;
+  addBowingStiffness(arch.NL0, pairs);
+  out.K = k.B.transpose().lazyProduct(localStiffnessTimes(pairs, k.B));
+  const Vec12 gradient = k.B.transpose() * arch.gradient;
+  const Vec12 axial = k.B.row(0).transpose();
+  out.K.noalias() += arch.EAL0 * gradient * gradient.transpose();
+  out.K.noalias() -= (arch.EAL0 * arch.gradient[0] * arch.gradient[0]) * axial * axial.transpose();
+  Eigen::Matrix<double, 12, 7> BtKl = Eigen::Matrix<double, 12, 7>::Zero();  // damping only
+  if (dampingBeta != 0.0) {
+    BtKl = localStiffnessTimes(beam.localStiffness, k.B).transpose();
+    out.C = dampingBeta * BtKl.lazyProduct(k.B);
+  }
   addGeometricStiffness(beam, k, fl, v, dampingBeta, BtKl, out.K);
   out.valid = out.f.allFinite() && out.K.allFinite();
   return out;
