@@ -40,10 +40,10 @@ RateTerms rateTerms(const JointMotion& m, const Columns& Hv, const Columns& Hw, 
 }
 
 // Body i of the forward recursion from its parent p. D is the joint's rate
-// count where it is known at compile time (1: revolute, prismatic; most
-// joints), Eigen::Dynamic otherwise: the same code, with the products on a
-// single rate unrolled (pendulum 0.54 -> 0.44 us per substep, double
-// pendulum 3.2 -> 2.5).
+// count where it is known at compile time (0: fixed; 1: revolute, prismatic; 3:
+// spherical, planar; 6: free, every virtual body), Eigen::Dynamic otherwise:
+// the same code, with the products fixed-size (single rate: pendulum 0.54
+// -> 0.44 us per substep, double pendulum 3.2 -> 2.5).
 template <int D>
 void forwardBody(const Joint& jt, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                  const BodyKinematics& p, BodyKinematics& c, JointKinematics& jk) {
@@ -88,10 +88,15 @@ void forwardKinematics(const Model& model, Data& data, const Configuration& q, c
     const Body& b = model.bodies[i];
     const Joint& jt = model.joints[b.inboardJoint];
     const BodyKinematics& p = b.parent == kGroundIndex ? ground : data.body[b.parent];
-    if (jt.dofs == 1)
-      forwardBody<1>(jt, q, v, vdot, p, data.body[i], data.joint[b.inboardJoint]);
-    else
-      forwardBody<Eigen::Dynamic>(jt, q, v, vdot, p, data.body[i], data.joint[b.inboardJoint]);
+    BodyKinematics& c = data.body[i];
+    JointKinematics& jk = data.joint[b.inboardJoint];
+    switch (jt.dofs) {
+      case 0: forwardBody<0>(jt, q, v, vdot, p, c, jk); break;
+      case 1: forwardBody<1>(jt, q, v, vdot, p, c, jk); break;
+      case 3: forwardBody<3>(jt, q, v, vdot, p, c, jk); break;
+      case 6: forwardBody<6>(jt, q, v, vdot, p, c, jk); break;
+      default: forwardBody<Eigen::Dynamic>(jt, q, v, vdot, p, c, jk);
+    }
   }
 }
 
