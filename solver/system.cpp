@@ -104,20 +104,20 @@ void System::retract(Configuration& q, const VectorXd& dq) const { mfbd::retract
 
 void System::turnWithRotations(const Configuration& from, const Configuration& to, VectorXd& x,
                                bool transpose) const {
+  // turn = R_to R_from^T, applied as two products with a vector.
   for (const TurningBlock& b : turningBlocks_) {
-    const Mat3 turn = to.rotations[b.rotation] * from.rotations[b.rotation].transpose();
+    const Mat3 &RFrom = from.rotations[b.rotation], &RTo = to.rotations[b.rotation];
     auto block = x.segment<3>(b.velocityOffset);
-    const Vec3 turned = transpose ? Vec3(turn.transpose() * block) : Vec3(turn * block);
+    const Vec3 turned = transpose ? Vec3(RFrom * (RTo.transpose() * block)) : Vec3(RTo * (RFrom.transpose() * block));
     block = turned;
   }
 }
 
 void System::turnOverStep(const Configuration& q, const VectorXd& v, double h, VectorXd& x) const {
   for (const TurningBlock& b : turningBlocks_) {
-    const Mat3& R = q.rotations[b.rotation];
-    const Mat3 turn = R * expSO3(h * Vec3(v.segment<3>(b.velocityOffset + 3))) * R.transpose();
+    const Mat3& R = q.rotations[b.rotation];  // R exp(h omega) R^T, applied to the block
     auto block = x.segment<3>(b.velocityOffset);
-    const Vec3 turned = turn * block;
+    const Vec3 turned = R * (expSO3(h * Vec3(v.segment<3>(b.velocityOffset + 3))) * (R.transpose() * block));
     block = turned;
   }
 }
