@@ -379,9 +379,11 @@ void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, co
 }
 
 // K_l B using the pattern of localTimoshenkoStiffness: axial (0), torsion
-// (1, 4), bending (2, 5) and (3, 6) couple only within their pairs.
-Mat7x12 localStiffnessTimes(const Mat7& Kl, const Mat7x12& B) {
-  Mat7x12 out;
+// (1, 4), bending (2, 5) and (3, 6) couple only within their pairs. For a
+// 7 x 12 map or a 7-vector alike.
+template <int Columns>
+Eigen::Matrix<double, 7, Columns> localStiffnessTimes(const Mat7& Kl, const Eigen::Matrix<double, 7, Columns>& B) {
+  Eigen::Matrix<double, 7, Columns> out;
   out.row(0) = Kl(0, 0) * B.row(0);
   for (int a = 1; a <= 3; ++a) {
     const int b = a + 3;
@@ -421,7 +423,7 @@ Vec7 localElasticForce(const CorotationalBeam& beam, const Vec7& e) {
   Vec7 g;
   const double q = archStrain(e, g);
   const double EA = beam.section.EA, N = EA * (e[0] / beam.L0 + q);
-  Vec7 f = beam.localStiffness * e;
+  Vec7 f = localStiffnessTimes(beam.localStiffness, e);
   f[0] = N;
   f += (N * beam.L0) * g;  // g[0] = 0
   return f;
@@ -522,7 +524,7 @@ namespace {
 Vec7 localForce(const CorotationalBeam& beam, const Kinematics& k, const Vec12& v, double dampingBeta) {
   const Mat7& Kl = beam.localStiffness;
   Vec7 fl = localElasticForce(beam, localDeformationVector(k));
-  if (dampingBeta != 0.0) fl += dampingBeta * (Kl * strainIncrement(beam, k, v));
+  if (dampingBeta != 0.0) fl += dampingBeta * localStiffnessTimes(Kl, strainIncrement(beam, k, v));
   return fl;
 }
 
@@ -621,7 +623,7 @@ bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const
     rate[0] = e1.dot(v2.v - v1.v);
     rate.segment<3>(1) = inverseTangentTimes(theta0, tangent0, w0 - R0.transpose() * spin, false);
     rate.segment<3>(4) = inverseTangentTimes(theta1, tangent1, w1 - R1.transpose() * spin, false);
-    fl += dampingBeta * (Kl * rate);
+    fl += dampingBeta * localStiffnessTimes(Kl, rate);
   }
   // f = B^T f_l (strainMapTranspose)
   const Vec3 m0 = inverseTangentTimes(theta0, tangent0, fl.segment<3>(1), true);
