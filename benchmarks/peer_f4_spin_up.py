@@ -29,7 +29,6 @@ as an Exudyn symbolic user function (an expression tree evaluated in C++, so
 no Python call per Newton iteration).
 Writes f4_spin_up_precision.csv, f4_spin_up_reference.csv and f4_spin_up_precision.png.
 """
-import time
 
 import numpy as np
 
@@ -82,19 +81,10 @@ def spin_up_scene(n):
 def ours(fmu, n, h, stop):
     run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF})
     names = [f"beam.node{i}.position.{c}" for i in range(n + 1) for c in "xy"]
-    try:
-        times, samples = [], []
-        start = time.perf_counter()
-        run.initialize()
-        for k in range(int(round(stop / OUTPUT))):
-            run.step(OUTPUT)
-            times.append((k + 1) * OUTPUT)
-            samples.append(run.get(*names))
-        wall = time.perf_counter() - start
-        statistics = run.statistics()
-    finally:
-        run.free()
-    tip, elongation = measures(np.array(times), np.array(samples).reshape(len(times), n + 1, 2))
+    s, wall, statistics = run.sample(names, stop, OUTPUT)
+    samples = s[1:]  # from t = OUTPUT on
+    times = OUTPUT * np.arange(1, len(samples) + 1)
+    tip, elongation = measures(times, samples.reshape(len(times), n + 1, 2))
     return dict(wall_time_s=wall, tip=tip, elongation=elongation, **statistics)
 
 
