@@ -161,8 +161,12 @@ void flexibleTangent(const FlexibleMesh& mesh, const std::vector<NodeState>& nod
                      Triplets& iteration) {
   for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
     const FlexNode& n = mesh.nodes[i];
-    const NodalInertiaForces in = nodalInertiaForces(n.inertia, nodes[i].velocity, nodes[i].acceleration);
-    scatter(n, n, cM * in.M + cC * in.G, iteration);
+    Mat6 S = Mat6::Zero();  // statics (cM = cC = 0): zeros, for the same pattern
+    if (cM != 0.0 || cC != 0.0) {
+      const NodalInertiaForces in = nodalInertiaForces(n.inertia, nodes[i].velocity, nodes[i].acceleration);
+      S = cM * in.M + cC * in.G;
+    }
+    scatter(n, n, S, iteration);
   }
   for (const FlexElement& e : mesh.elements) {
     const NodeState &s1 = nodes[e.node1], &s2 = nodes[e.node2];

@@ -1,14 +1,45 @@
 #include "integrator/block_tridiagonal.hpp"
 
 #include <algorithm>
-
-#include <Eigen/LU>
+#include <cmath>
 
 namespace mfbd {
 
 namespace {
 constexpr int kBlockValues = 3 * 36;  // D_k, L_k, U_k of one block row
+
+// S^-1 by Gauss-Jordan elimination with partial pivoting, unrolled on the
+// fixed size (Eigen's LU inverse goes through its general triangular
+// solvers, a fifth of a static beam's Newton iteration). False when a
+// pivot (the same as LU's) is below 1e-12 of its column's scale in S: the
+// rows differ in units.
+bool invert(BlockTridiagonal::Mat6 S, BlockTridiagonal::Mat6& inverse) {
+  using Mat6 = BlockTridiagonal::Mat6;
+  const BlockTridiagonal::Vec6 scale = S.cwiseAbs().colwise().maxCoeff().transpose();
+  Mat6 X = Mat6::Identity();
+  for (int c = 0; c < 6; ++c) {
+    int p;
+    S.col(c).tail(6 - c).cwiseAbs().maxCoeff(&p);
+    p += c;
+    if (!(std::abs(S(p, c)) > 1e-12 * scale[c])) return false;
+    if (p != c) {
+      S.row(p).swap(S.row(c));
+      X.row(p).swap(X.row(c));
+    }
+    const double pivot = 1.0 / S(c, c);
+    S.row(c) *= pivot;
+    X.row(c) *= pivot;
+    for (int r = 0; r < 6; ++r) {
+      const double f = S(r, c);
+      if (r == c || f == 0.0) continue;
+      S.row(r) -= f * S.row(c);
+      X.row(r) -= f * X.row(c);
+    }
+  }
+  inverse = X;
+  return true;
 }
+}  // namespace
 
 bool BlockTridiagonal::analyze(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& A) {
   start_.clear();
@@ -63,14 +94,10 @@ bool BlockTridiagonal::factorize(const Eigen::SparseMatrix<double, Eigen::ColMaj
       S.noalias() -= L * backward_[k - 1];
       forward_[k].noalias() = L * inverse_[k - 1];
     }
-    // Each pivot judged against its own column (the rows differ in units),
-    // and the complement against the block it came from.
-    const Eigen::PartialPivLU<Mat6> lu(S);
-    const Vec6 pivots = lu.matrixLU().diagonal().cwiseAbs();
-    const Vec6 columnScale = S.cwiseAbs().colwise().maxCoeff().transpose();
-    if (!(pivots.array() > 1e-12 * columnScale.array()).all()) return false;
+    // The complement judged against the block it came from, its pivots
+    // against their columns (invert).
     if (!(S.cwiseAbs().maxCoeff() <= 1e6 * D.cwiseAbs().maxCoeff())) return false;
-    inverse_[k] = lu.inverse();
+    if (!invert(S, inverse_[k])) return false;
     backward_[k].noalias() = inverse_[k] * U;
   }
   return true;
