@@ -55,7 +55,7 @@ bool BlockTridiagonal::analyze(const Eigen::SparseMatrix<double, Eigen::ColMajor
     if (j == 0 || !samePattern(j - 1, j) || j - start_.back() == 6) start_.push_back(j);
   start_.push_back(n);
   const int blocks = int(start_.size()) - 1;
-  if (blocks < 3) return false;
+  if (blocks < 2) return false;
   std::vector<int> blockOf(n);
   for (int k = 0; k < blocks; ++k) std::fill(blockOf.begin() + start_[k], blockOf.begin() + start_[k + 1], k);
   destination_.resize(A.nonZeros());

@@ -29,7 +29,7 @@ class BlockTridiagonal {
   using Vec6 = Eigen::Matrix<double, 6, 1>;
 
   // True if A's pattern is block tridiagonal in blocks of at most 6 (and
-  // at least three blocks); then factorize and solve work on it.
+  // at least two blocks); then factorize and solve work on it.
   bool analyze(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& A);
   bool factorize(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& A);
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;

@@ -56,6 +56,18 @@ TEST(BlockTridiagonal, SolvesBlocksOfMixedSizesAsDenseLUDoes) {
   EXPECT_LT(relativeError(x, Eigen::MatrixXd(A2).partialPivLu().solve(b)), 1e-13);
 }
 
+TEST(BlockTridiagonal, SolvesTwoBlocks) {
+  // A beam of two free nodes (F3, F4 at 2 elements), one of them supported.
+  const SparseMatrix A = blockTridiagonalMatrix({6, 4}, 3.0, 5u);
+  BlockTridiagonal blocks;
+  ASSERT_TRUE(blocks.analyze(A));
+  ASSERT_TRUE(blocks.factorize(A));
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(A.rows(), 2.0, -1.0);
+  Eigen::VectorXd x;
+  blocks.solve(b, x);
+  EXPECT_LT(relativeError(x, Eigen::MatrixXd(A).partialPivLu().solve(b)), 1e-13);
+}
+
 TEST(BlockTridiagonal, RefusesAnEntryBeyondTheNeighbourBlocks) {
   SparseMatrix A = blockTridiagonalMatrix({6, 6, 6, 6}, 4.0, 3u);
   A.coeffRef(0, 18) = 1.0;  // block 0 coupled with block 3
