@@ -75,9 +75,11 @@ Eigen::Matrix<double, 12, Block::ColsAtCompileTime> mapTranspose(const std::arra
 
 // The same f as consistentInertia's, with vector operations only (the
 // residual evaluates it for every element in every Newton iteration).
-Vec12 consistentInertiaForce(const CorotationalBeam& beam, double mass, const NodePose& n1, const NodeVelocity& v1,
-                             const NodeAcceleration& a1, const NodePose& n2, const NodeVelocity& v2,
-                             const NodeAcceleration& a2, const Vec3& gravity) {
+// Flattened, as internalForceVector: the residual's other element pass.
+[[gnu::flatten]] Vec12 consistentInertiaForce(const CorotationalBeam& beam, double mass, const NodePose& n1,
+                                              const NodeVelocity& v1, const NodeAcceleration& a1, const NodePose& n2,
+                                              const NodeVelocity& v2, const NodeAcceleration& a2,
+                                              const Vec3& gravity) {
   const double L0 = beam.L0;
   const Vec3 x = n2.r - n1.r;
   const double l = x.norm();

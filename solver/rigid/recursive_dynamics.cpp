@@ -43,9 +43,11 @@ RateTerms rateTerms(const JointMotion& m, const Columns& Hv, const Columns& Hw, 
 // count where it is known at compile time (0: fixed; 1: revolute, prismatic; 3:
 // spherical, planar; 6: free, every virtual body), Eigen::Dynamic otherwise:
 // the same code, with the products fixed-size (single rate: pendulum 0.54
-// -> 0.44 us per substep, double pendulum 3.2 -> 2.5).
+// -> 0.44 us per substep, double pendulum 3.2 -> 2.5). Flattened (every
+// call inside inlined): with five instantiations GCC stopped inlining
+// Eigen's small assignment loops into them (pendulum +7 %).
 template <int D>
-void forwardBody(const Joint& jt, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
+[[gnu::flatten]] void forwardBody(const Joint& jt, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                  const BodyKinematics& p, BodyKinematics& c, JointKinematics& jk) {
   const int n = jt.dofs;
   const auto qdot = v.template segment<D>(jt.velocityOffset, n);
@@ -158,7 +160,9 @@ void computeVelocityTransformation(const Model& model, Data& data) {
   }
 }
 
-void backwardNewtonEuler(const Model& model, Data& data, const VectorXd& jointForces, VectorXd& residual) {
+// Flattened like forwardBody: its small Eigen products inlined.
+[[gnu::flatten]] void backwardNewtonEuler(const Model& model, Data& data, const VectorXd& jointForces,
+                                          VectorXd& residual) {
   residual.setZero(model.rigidVelocityCount);
   const int n = int(model.bodies.size());
   for (int i = 0; i < n; ++i) {
