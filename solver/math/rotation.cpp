@@ -28,24 +28,27 @@ struct ExpCoefficients {
 };
 
 // From the squared angle: the series need no square root, and small
-// increments (every Newton correction) need few terms.
+// increments (every Newton correction) need few terms. withC: also c
+// (only the tangent operator needs it, not the exponential map).
+template <bool withC>
 inline ExpCoefficients expCoefficients(double t2) {
   if (t2 < 0.04) {
     // Taylor series in t^2 (no sin/cos), more accurate than the closed
-    // forms, which cancel as t -> 0. Up to t^10 for t < 0.2, up to t^6 for
-    // t < 0.01: the first omitted term is below 1e-18 relative either way.
+    // forms, which cancel as t -> 0. Up to t^10 for t < 0.2, t^6 for
+    // t < 0.01, t^4 for t < 1e-3: the first omitted term is below 1e-18
+    // relative in each range.
     static constexpr double a[6] = {1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0};
     static constexpr double b[6] = {1.0 / 2.0, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0,
                                     -1.0 / 479001600.0};
     static constexpr double c[6] = {1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0,
                                     -1.0 / 6227020800.0};
-    const int last = t2 < 1e-4 ? 3 : 5;
+    const int last = t2 < 1e-6 ? 2 : t2 < 1e-4 ? 3 : 5;
     auto series = [t2, last](const double* k) {  // sum_n k_n t^2n, Horner
       double sum = k[last];
       for (int n = last - 1; n >= 0; --n) sum = sum * t2 + k[n];
       return sum;
     };
-    return {series(a), series(b), series(c)};
+    return {series(a), series(b), withC ? series(c) : 0.0};
   }
   const double t = std::sqrt(t2);
   const double s = std::sin(t), c = std::cos(t);
@@ -55,7 +58,7 @@ inline ExpCoefficients expCoefficients(double t2) {
 
 Mat3 expSO3(const Vec3& theta) {
   const double t2 = theta.squaredNorm();
-  const ExpCoefficients k = expCoefficients(t2);
+  const ExpCoefficients k = expCoefficients<false>(t2);
   // I + a S + b S^2 with S^2 = theta theta^T - t^2 I (no 3 x 3 product).
   Mat3 E = (k.b * theta) * theta.transpose();
   E.diagonal().array() += 1.0 - k.b * t2;
@@ -101,7 +104,7 @@ Vec3 logSO3(const Mat3& R) {
 }
 
 Mat3 tangentSO3(const Vec3& theta) {
-  const ExpCoefficients k = expCoefficients(theta.squaredNorm());
+  const ExpCoefficients k = expCoefficients<true>(theta.squaredNorm());
   const Mat3 S = skew(theta);
   return Mat3::Identity() - k.b * S + k.c * S * S;
 }

@@ -2,17 +2,25 @@
 
 namespace mfbd {
 
-void retractBlock(const CoordinateBlock& b, Configuration& q, const Eigen::Ref<const VectorXd>& dq) {
+namespace {
+// Block b of q <- b o exp(dq), dq pointing at the block's own rates.
+inline void retractAt(const CoordinateBlock& b, Configuration& q, const double* dq) {
   if (b.rotation >= 0) {
     Mat3& R = q.rotations[b.rotation];
-    R = R * expSO3(dq.head<3>());
+    R = R * expSO3(Vec3(dq[0], dq[1], dq[2]));
   } else {
-    q.scalars.segment(b.scalarOffset, b.size) += dq;
+    double* x = q.scalars.data() + b.scalarOffset;
+    for (int i = 0; i < b.size; ++i) x[i] += dq[i];
   }
+}
+}  // namespace
+
+void retractBlock(const CoordinateBlock& b, Configuration& q, const Eigen::Ref<const VectorXd>& dq) {
+  retractAt(b, q, dq.data());
 }
 
 void retract(const std::vector<CoordinateBlock>& blocks, Configuration& q, const VectorXd& dq) {
-  for (const CoordinateBlock& b : blocks) retractBlock(b, q, dq.segment(b.velocityOffset, b.size));
+  for (const CoordinateBlock& b : blocks) retractAt(b, q, dq.data() + b.velocityOffset);
 }
 
 void restoreOrthogonality(Configuration& q) {
