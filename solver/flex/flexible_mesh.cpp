@@ -16,6 +16,15 @@ void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const 
   for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
     const FlexNode& n = mesh.nodes[i];
     NodeState& s = nodes[i];
+    if (n.free) {  // the usual node: 6 consecutive rates, P = I
+      s.pose.r = n.reference.r + q.scalars.segment<3>(n.scalarOffset);
+      s.velocity.v = v.segment<3>(n.dof[0]);
+      s.acceleration.a = vdot.segment<3>(n.dof[0]);
+      s.pose.A = q.rotations[n.rotation];
+      s.velocity.omega = v.segment<3>(n.dof[3]);
+      s.acceleration.omegaDot = vdot.segment<3>(n.dof[3]);
+      continue;
+    }
     // Translation: r = r0 + T x with T the first three rows of P.
     s.pose.r = n.reference.r;
     s.velocity.v.setZero();
