@@ -2,12 +2,6 @@
 
 #include "flex/consistent_mass.hpp"
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11
-#define MFBD_HOT_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define MFBD_HOT_CLONES
-#endif
-
 namespace mfbd {
 
 double DriveState::angle(const FlexibleMesh& mesh, const VectorXd& inputs, int drive, double t) const {
@@ -153,12 +147,7 @@ bool elementForce(const FlexElement& e, const NodeState& s1, const NodeState& s2
   return true;
 }
 
-// The mesh's residual, the hot loop of a flexible run, flattened (the
-// element forces inlined) and compiled twice on x86-64: for the baseline
-// and for x86-64-v3 (AVX2, FMA), chosen when the FMU is loaded (cantilever
-// cost study 0.60 -> 0.57 us per element-step). The two differ in
-// round-off only.
-MFBD_HOT_CLONES [[gnu::flatten]] bool flexibleResidual(const FlexibleMesh& mesh, const std::vector<NodeState>& nodes, const Vec3& gravity,
+bool flexibleResidual(const FlexibleMesh& mesh, const std::vector<NodeState>& nodes, const Vec3& gravity,
                       const VectorXd& inputs, double t, bool withInertia, VectorXd& r) {
   for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
     const FlexNode& n = mesh.nodes[i];
