@@ -48,10 +48,12 @@ class FmuRun:
     """One FMU instance, for timing a run and reading its Newton statistics.
 
     In the timed loop, step() and get() call the FMU's fmi2DoStep and
-    fmi2GetReal through their ctypes entry points with arrays made once,
-    which is what a C importer does; fmpy's checked wrappers (argument
-    logging, status checks) would add about 2 us of Python per call, 5 ms
-    of 10 ms in F3 at n = 2 (1,000 doSteps and reads). Solver statistics
+    fmi2GetReal through bare ctypes prototypes over the FMU's library,
+    with addresses of arrays made once, which is what a C importer does;
+    fmpy's checked wrappers (argument logging, status checks) would add
+    about 2 us of Python per call, 5 ms of 10 ms in F3 at n = 2 (1,000
+    doSteps and reads), and its ctypes entry points (typed arguments
+    converted at every call) 0.2 us. Solver statistics
     come from the `logStatistics` line that fmi2Terminate writes (no log
     callback into Python at every step). The Newton tolerance is
     NEWTON_TOLERANCE (Exudyn's) unless `parameters` sets solver.tolerance."""
@@ -65,25 +67,30 @@ class FmuRun:
         for name, value in parameters.items():
             assert self.slave.set(name, value) == 0, self.slave.messages()
         self.t = 0.0
-        functions = self.slave.fmu._functions
-        self._do_step, self._get_real = functions["fmi2DoStep"], functions["fmi2GetReal"]
-        self._reads = {}  # names -> (value references, values)
+        library = self.slave.fmu.dll
+        self._component = ctypes.cast(self.slave.fmu.component, ctypes.c_void_p).value
+        self._do_step = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_double, ctypes.c_double,
+                                         ctypes.c_int)(("fmi2DoStep", library))
+        self._get_real = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
+                                          ctypes.c_void_p)(("fmi2GetReal", library))
+        self._reads = {}  # names -> (value references, values, their addresses)
 
     def initialize(self):
         assert self.slave.call("enterInitializationMode") == 0, self.slave.messages()
         assert self.slave.call("exitInitializationMode") == 0, self.slave.messages()
 
     def step(self, h):
-        status = self._do_step(self.slave.fmu.component, self.t, h, 1)
+        status = self._do_step(self._component, self.t, h, 1)
         assert status == 0, f"fmi2DoStep status {status} at t = {self.t}:\n{self.slave.messages()}"
         self.t += h
 
     def get(self, *names):
         if names not in self._reads:
             references = (ctypes.c_uint * len(names))(*(self.slave.vr[n] for n in names))
-            self._reads[names] = references, (ctypes.c_double * len(names))()
-        references, values = self._reads[names]
-        assert self._get_real(self.slave.fmu.component, references, len(names), values) == 0, self.slave.messages()
+            values = (ctypes.c_double * len(names))()
+            self._reads[names] = references, values, ctypes.addressof(references), ctypes.addressof(values)
+        _, values, references, into = self._reads[names]
+        assert self._get_real(self._component, references, len(names), into) == 0, self.slave.messages()
         return values[0] if len(names) == 1 else list(values)
 
     def statistics(self):
@@ -105,16 +112,16 @@ class FmuRun:
         communication point (t = 0 included), and frees the instance.
         Returns (samples, one row per point, the wall time of the run,
         statistics). The timed loop is fmi2DoStep and fmi2GetReal alone,
-        each read going straight into its row of the array (the row
-        pointers made before the clock starts), as a C importer's loop:
+        each read going straight into its row of the array (the rows'
+        addresses taken before the clock starts), as a C importer's loop:
         no Python object per sample."""
         steps = int(round(stop / output))
         count = len(names)
         samples = np.zeros((steps + 1, count))
-        references = (ctypes.c_uint * count)(*(self.slave.vr[n] for n in names))
-        row_pointer = ctypes.POINTER(ctypes.c_double)
-        rows = [ctypes.cast(samples.ctypes.data + i * samples.strides[0], row_pointer) for i in range(steps + 1)]
-        component, do_step, get_real = self.slave.fmu.component, self._do_step, self._get_real
+        reference_array = (ctypes.c_uint * count)(*(self.slave.vr[n] for n in names))
+        references = ctypes.addressof(reference_array)
+        rows = [samples.ctypes.data + i * samples.strides[0] for i in range(steps + 1)]  # addresses
+        component, do_step, get_real = self._component, self._do_step, self._get_real
         t, failed = 0.0, None
         try:
             start = time.perf_counter()
