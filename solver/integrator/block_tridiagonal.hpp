@@ -10,7 +10,8 @@
 //   S_0 = D_0,  S_k = D_k - L_k S_{k-1}^-1 U_{k-1},
 // with L_k, D_k, U_k the blocks left of, on and right of the diagonal. A
 // solve is then three 6 x 6 products per block against KLU's indexed
-// sparse triangles (a cantilever of 1000 elements: 4x faster solves).
+// sparse triangles (a cantilever of 1000 elements: 23 against 105-170 ns
+// per element and solve).
 // Pivoting stays within a block; factorize refuses (false) a matrix whose
 // Schur complements S_k grow or turn near singular (no cross-block pivot
 // would be needed in a mass- or stiffness-dominated beam; something else
