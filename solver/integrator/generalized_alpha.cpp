@@ -39,7 +39,7 @@ bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std:
   if (m > 0) {
     // Iterative refinement against the unregularised matrix removes the
     // regularisation's error from the multipliers (they are reaction outputs).
-    const SparseMatrix exact = iterationMatrix(system, state, 1.0, 0.0, 0.0, false);
+    const SparseMatrix exact = unregularized(system, S);
     for (int sweep = 0; sweep < 3; ++sweep) x += mass.solve(rhs - exact * x);
   }
   state.vdot = x.head(n);

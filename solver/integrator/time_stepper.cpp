@@ -26,7 +26,7 @@ std::vector<std::pair<int, int>> TimeStepper::pivotOrder(const Dynamics& system,
 }
 
 void TimeStepper::iterationTriplets(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
-                                    bool regularize, Triplets& all, Triplets& jacobian) {
+                                    Triplets& all, Triplets& jacobian) {
   const int n = system.velocityCount(), m = system.constraintCount();
   all.clear();
   jacobian.clear();
@@ -51,25 +51,31 @@ void TimeStepper::iterationTriplets(Dynamics& system, const IntegratorState& at,
     for (const auto& t : all)
       if (t.row() == t.col() && (t.row() < n || t.row() >= n + m)) sMax = std::max(sMax, std::abs(t.value()));
     for (const auto& t : jacobian) gMax = std::max(gMax, std::abs(t.value()));
-    const double eps = !regularize ? 0.0 : sMax > 0.0 ? 1e-8 * gMax * gMax / sMax : 1e-8;
+    const double eps = sMax > 0.0 ? 1e-8 * gMax * gMax / sMax : 1e-8;
     for (int i = n; i < n + m; ++i) all.emplace_back(i, i, -eps);
   }
 }
 
 SparseMatrix TimeStepper::iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC,
-                                          double cK, bool regularize) {
+                                          double cK) {
   const int size = newtonSize(system, cM);
   Triplets all, jacobian;
-  iterationTriplets(system, at, cM, cC, cK, regularize, all, jacobian);
+  iterationTriplets(system, at, cM, cC, cK, all, jacobian);
   SparseMatrix S(size, size);
   S.setFromTriplets(all.begin(), all.end());
   S.makeCompressed();
   return S;
 }
 
+SparseMatrix TimeStepper::unregularized(const Dynamics& system, SparseMatrix S) {
+  const int n = system.velocityCount(), m = system.constraintCount();
+  for (int i = n; i < n + m; ++i) S.coeffRef(i, i) = 0.0;
+  return S;
+}
+
 bool TimeStepper::assembleIterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC,
                                           double cK) {
-  iterationTriplets(system, at, cM, cC, cK, true, iterationTriplets_, jacobianTriplets_);
+  iterationTriplets(system, at, cM, cC, cK, iterationTriplets_, jacobianTriplets_);
   return iteration_.assign(newtonSize(system, cM), iterationTriplets_);
 }
 
@@ -83,7 +89,7 @@ bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const
   rhs.segment(n, m) = -violation;
   VectorXd x = solver.solve(rhs);
   // Refinement against the unregularised matrix meets the constraints exactly.
-  const SparseMatrix exact = iterationMatrix(system, state, 1.0, 0.0, 0.0, false);
+  const SparseMatrix exact = unregularized(system, A);
   for (int sweep = 0; sweep < 3; ++sweep) x += solver.solve(rhs - exact * x);
   if (!x.allFinite()) return false;
   state.v += x.head(n);

@@ -59,10 +59,12 @@ class TimeStepper {
   virtual bool substep(Dynamics& system, IntegratorState& s, double h, std::string& why) = 0;
   virtual void beginAdvance(const Dynamics& /*system*/) {}
 
-  // The Newton matrix [S Phi_q^T; Phi_q -eps I] from the system's tangent
-  // (eps = 0 with regularize false), auxiliary unknowns last.
-  static SparseMatrix iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
-                                      bool regularize = true);
+  // The Newton matrix [S Phi_q^T; Phi_q -eps I] from the system's tangent,
+  // auxiliary unknowns last.
+  static SparseMatrix iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK);
+  // The same without the regularisation (eps = 0): the multipliers'
+  // diagonal holds nothing else, so it is set to zero (no second tangent).
+  static SparseMatrix unregularized(const Dynamics& system, SparseMatrix S);
   // The same (regularised) matrix into assembledIterationMatrix(), reusing
   // the pattern and the triplet storage of the previous call; true when the
   // pattern is new and needs a symbolic analysis.
@@ -78,7 +80,7 @@ class TimeStepper {
 
  private:
   static void iterationTriplets(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
-                                bool regularize, Triplets& all, Triplets& jacobian);
+                                Triplets& all, Triplets& jacobian);
 
   Triplets iterationTriplets_, jacobianTriplets_;
   SparseAssembly iteration_;

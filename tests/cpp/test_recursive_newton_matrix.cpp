@@ -23,6 +23,10 @@ namespace {
 struct Stepper : TimeStepper {
   using TimeStepper::TimeStepper;
   using TimeStepper::iterationMatrix;
+  // The Newton matrix without the multipliers' regularisation.
+  static SparseMatrix exact(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK) {
+    return unregularized(system, iterationMatrix(system, at, cM, cC, cK));
+  }
   using TimeStepper::newtonSize;
   using TimeStepper::pivotOrder;
   bool initialize(Dynamics&, IntegratorState&, std::string&) override { return true; }
@@ -129,8 +133,8 @@ IntegratorState stateOf(const Configuration& q, const VectorXd& v, const VectorX
 // complement onto velocities and multipliers, less its mass block.
 Eigen::MatrixXd jointRateBlock(System& s, const IntegratorState& st, double cC, double cK) {
   const int k = s.velocityCount() + s.constraintCount();
-  const Eigen::MatrixXd all = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, cC, cK, false)), k);
-  const Eigen::MatrixXd mass = schurComplement(denseMatrix(Stepper::iterationMatrix(s, st, 1, 0, 0, false)), k);
+  const Eigen::MatrixXd all = schurComplement(denseMatrix(Stepper::exact(s, st, 1, cC, cK)), k);
+  const Eigen::MatrixXd mass = schurComplement(denseMatrix(Stepper::exact(s, st, 1, 0, 0)), k);
   return (all - mass).topLeftCorner(s.velocityCount(), s.velocityCount());
 }
 
@@ -192,9 +196,9 @@ TEST(RecursiveNewtonMatrix, MassBlockIsTheJointSpaceMassMatrix) {
     // Unregularised: the -eps I of the constraint block scales with each
     // form's own diagonal.
     const Eigen::MatrixXd J =
-        denseMatrix(Stepper::iterationMatrix(joint, stateOf(q, v, vdot, lambda), 1, 0, 0, false));
+        denseMatrix(Stepper::exact(joint, stateOf(q, v, vdot, lambda), 1, 0, 0));
     const Eigen::MatrixXd R =
-        denseMatrix(Stepper::iterationMatrix(recursive, stateOf(q, v, vdot, lambda), 1, 0, 0, false));
+        denseMatrix(Stepper::exact(recursive, stateOf(q, v, vdot, lambda), 1, 0, 0));
     ASSERT_EQ(R.rows(), n + m + 18 * bodies);
     const Eigen::MatrixXd S = schurComplement(R, n + m);
     EXPECT_LT((S - J).cwiseAbs().maxCoeff(), 1e-10 * J.cwiseAbs().maxCoeff());
@@ -383,7 +387,7 @@ TEST(RecursiveNewtonMatrix, BodyInertiaBlockMatchesFiniteDifferences) {
   const Mat3 J = k.orientation * J0 * k.orientation.transpose();
   const double cM = 1.0, cC = 0.7, cK = 0.3;
   const Eigen::MatrixXd R =
-      denseMatrix(Stepper::iterationMatrix(system, stateOf(q, v, vdot, VectorXd()), cM, cC, cK, false));
+      denseMatrix(Stepper::exact(system, stateOf(q, v, vdot, VectorXd()), cM, cC, cK));
   // Body 0's rotary rows: cM J on its acceleration (columns n + 12 + 3..),
   // the rest on its pose and velocity (columns n + 3..).
   const Mat3 block = R.block<3, 3>(n + 3, n + 3) + R.block<3, 3>(n + 3, n + 12 + 3);
