@@ -73,7 +73,7 @@ class FmuRun:
                                          ctypes.c_int)(("fmi2DoStep", library))
         self._get_real = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
                                           ctypes.c_void_p)(("fmi2GetReal", library))
-        self._reads = {}  # names -> (value references, values, their addresses)
+        self._reads = {}  # names -> (value references, values)
 
     def initialize(self):
         assert self.slave.call("enterInitializationMode") == 0, self.slave.messages()
@@ -88,9 +88,10 @@ class FmuRun:
         if names not in self._reads:
             references = (ctypes.c_uint * len(names))(*(self.slave.vr[n] for n in names))
             values = (ctypes.c_double * len(names))()
-            self._reads[names] = references, values, ctypes.addressof(references), ctypes.addressof(values)
-        _, values, references, into = self._reads[names]
-        assert self._get_real(self._component, references, len(names), into) == 0, self.slave.messages()
+            self._reads[names] = references, values  # kept alive: the FMU is given their addresses
+        references, values = self._reads[names]
+        status = self._get_real(self._component, ctypes.addressof(references), len(names), ctypes.addressof(values))
+        assert status == 0, self.slave.messages()
         return values[0] if len(names) == 1 else list(values)
 
     def statistics(self):

@@ -123,14 +123,12 @@ void scatter(const FlexNode& a, const FlexNode& b, const Mat6& B, Triplets& out)
   scatter(a, b, isFree(a) && isFree(b), B, out);
 }
 
-}  // namespace
-
-namespace {
 // Whether the element's consistent mass acts: in dynamics, or in statics
 // under gravity (its weight); a static study without gravity skips it.
 bool carriesMass(const FlexElement& e, const Vec3& gravity, bool withInertia) {
   return e.mass > 0.0 && (withInertia || gravity != Vec3::Zero());
 }
+
 }  // namespace
 
 bool elementForce(const FlexElement& e, const NodeState& s1, const NodeState& s2, const Vec3& gravity,

@@ -47,8 +47,9 @@ RateTerms rateTerms(const JointMotion& m, const Columns& Hv, const Columns& Hw, 
 // call inside inlined): with five instantiations GCC stopped inlining
 // Eigen's small assignment loops into them (pendulum +7 %).
 template <int D>
-[[gnu::flatten]] void forwardBody(const Joint& jt, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
-                 const BodyKinematics& p, BodyKinematics& c, JointKinematics& jk) {
+[[gnu::flatten]] void forwardBody(const Joint& jt, const Configuration& q, const VectorXd& v,
+                                  const VectorXd& vdot, const BodyKinematics& p, BodyKinematics& c,
+                                  JointKinematics& jk) {
   const int n = jt.dofs;
   const auto qdot = v.template segment<D>(jt.velocityOffset, n);
   const auto qddot = vdot.template segment<D>(jt.velocityOffset, n);
