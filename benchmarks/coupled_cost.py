@@ -16,7 +16,8 @@ four ways:
   * coupled: the hub, and a rigid tip body (1 kg) on a fixed joint at the
     beam's end: two virtual bodies and flexible body joints.
 Each advanced by mfbd::Simulation::doStep with implicit substeps h = 1e-3
-and communication steps of 0.01 s over 0.2 s. Timed twice: the wall time of
+and communication steps of 0.01 s over 0.2 s, Newton to the tolerance of
+flexible_cost.py (1e-12). Timed twice: the wall time of
 the fastest of repeated runs (as flexible_cost.py), and the least process
 CPU time of the same runs, which is what the plot and the fitted exponents
 use: on a machine shared with other jobs (2 cores, load 4) the wall time of
@@ -87,7 +88,8 @@ def main():
     binary = compile_benchmark(args.build, "flexible_cost")
     rows = []
     for scene in SCENES:
-        for r in run(binary, args, ["--min-time", str(args.min_time), "--scene", scene]):
+        for r in run(binary, args, ["--min-time", str(args.min_time), "--scene", scene,
+                                      "--tolerance", str(args.tolerance)]):
             rows.append(dict(scene=scene, **r))
             print(f"{scene:10s} N = {r['elements']:>5}: CPU {float(r['cpu_us_per_step']):9.1f} us/step, "
                   f"{float(r['cpu_us_per_element_step']):6.3f} us/element-step (wall "
@@ -95,11 +97,11 @@ def main():
                   f"factorizations {r['factorizations_per_step']}/step", flush=True)
     header = ["scene", "elements", "cpu_us_per_step", "cpu_us_per_element_step", "us_per_step",
               "us_per_element_step", "newton_iterations_per_step", "factorizations_per_step", "unknowns", "substeps",
-              "communication_step_s", "repeats"]
+              "communication_step_s", "newton_tolerance", "repeats"]
     write_csv(args.out / "coupled_cost.csv", header,
               [[r["scene"], r["elements"], r["cpu_us_per_step"], r["cpu_us_per_element_step"], r["us_per_step"],
                 r["us_per_element_step"], r["newton_per_step"], r["factorizations_per_step"], r["unknowns"],
-                r["substeps"], args.communication, r["repeats"]] for r in rows])
+                r["substeps"], args.communication, args.tolerance, r["repeats"]] for r in rows])
     for scene in SCENES:
         sel = [r for r in rows if r["scene"] == scene]
         n = np.array([float(r["elements"]) for r in sel])
@@ -115,7 +117,8 @@ def main():
     for scene in ("driven", "hub"):
         for communication in COMMUNICATION:
             single = argparse.Namespace(**{**vars(args), "elements": [100], "communication": communication})
-            r = run(binary, single, ["--min-time", str(args.min_time), "--scene", scene])[0]
+            r = run(binary, single, ["--min-time", str(args.min_time), "--scene", scene,
+                                     "--tolerance", str(args.tolerance)])[0]
             table.append([scene, r["elements"], communication, r["cpu_us_per_step"], r["cpu_us_per_element_step"],
                           r["newton_per_step"], r["factorizations_per_step"]])
             print(f"{scene:7s} N = 100, doStep {communication:5.3f} s: CPU {float(r['cpu_us_per_step']):8.1f} us/substep, "
