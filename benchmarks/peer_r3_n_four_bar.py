@@ -21,16 +21,18 @@ Metrics, sampled every 0.01 s in both codes:
     (integrated here by scipy to 1e-12);
   * energy_drift: the total energy drift, max |E(t) - E(0)| in m g L;
   * constraint_drift: the largest distance of a crank's foot from its
-    ground pivot (the cut joints in ours; all pivots are constraints in
-    Exudyn) and of a coupler end from its crank's top, m.
+    ground pivot and of a coupler's ends from the cranks' tops (each
+    coupler's end on the next crank is a cut joint in ours; every joint is
+    a constraint in Exudyn), m.
 over substeps h = 1e-2 ... 5e-4. Generalized-alpha rho_inf = 0.8 (the
 scene's default; both codes), Newton on the increment 1e-12 (Exudyn's
 modified Newton fails at 1e-14 here).
 
-Ours: examples/n_four_bar/make_scene.py (a tree crank0 - coupler0 - crank1 -
-... in joint coordinates, 81 joint coordinates; the other 40 ground
-pivots are cut joints, 80 planar + 120 out-of-plane constraint rows, the
-out-of-plane ones redundant in a planar motion), all bodies as outputs.
+Ours: examples/n_four_bar/make_scene.py (a tree of two levels, every crank
+on its ground pivot and every coupler on its crank's top, 81 joint
+coordinates; each coupler's joint to the next crank is cut, 80 planar +
+120 out-of-plane constraint rows, the out-of-plane ones redundant in a
+planar motion), all bodies as outputs.
 Exudyn: 81 RigidBody2D (243 coordinates), 121 RevoluteJoint2D (242 rows,
 index 3), sparse LU (EigenSparse).
 Writes r3_n_four_bar_precision.csv and .png.

@@ -35,15 +35,12 @@ System::System(Model model)
     for (int d = 0; d < own.dofs; ++d) bodyOfColumn[own.velocityOffset + d] = b;
   }
   // Two rates couple in the tree's tangent (mass, and the derivatives of the
-  // joint-space forces) only when one joint is outboard of the other: the
-  // forces on a subtree depend on the poses of that subtree and its path to
-  // ground. Cut joints and force elements between two bodies couple any
-  // branches: then every pair.
-  bool branchesCoupled = false;
-  for (const Joint& j : model_.joints) branchesCoupled = branchesCoupled || j.cut;
-  for (const ForceElement& f : model_.forces)
-    branchesCoupled = branchesCoupled || (f.kind != ForceElement::Kind::AppliedForce &&
-                                          f.marker1.body != kGroundIndex && f.marker2.body != kGroundIndex);
+  // joint-space forces) when one joint is outboard of the other: the forces
+  // on a subtree depend on the poses of that subtree and its path to ground.
+  // A cut joint or a force element between bodies a and b couples, besides,
+  // every pair of the rates that move a or b: its force depends on both
+  // poses and lands on both paths to ground (R3's 40 loops: a band of three
+  // rates, not the dense 81 x 81 of all pairs).
   auto outboardOf = [&](int inner, int outer) {
     for (int at = outer; at != kGroundIndex; at = model_.bodies[at].parent)
       if (at == inner) return true;
@@ -52,15 +49,25 @@ System::System(Model model)
   ratesCoupled_.resize(n, n);
   for (int i = 0; i < n; ++i)
     for (int k = 0; k < n; ++k)
-      ratesCoupled_(i, k) = branchesCoupled || outboardOf(bodyOfColumn[i], bodyOfColumn[k]) ||
-                            outboardOf(bodyOfColumn[k], bodyOfColumn[i]);
+      ratesCoupled_(i, k) =
+          outboardOf(bodyOfColumn[i], bodyOfColumn[k]) || outboardOf(bodyOfColumn[k], bodyOfColumn[i]);
+  auto coupleSupports = [&](int a, int b) {
+    std::vector<int> columns;
+    for (int body : {a, b})
+      if (body != kGroundIndex) columns.insert(columns.end(), supportColumns_[body].begin(), supportColumns_[body].end());
+    for (int i : columns)
+      for (int k : columns) ratesCoupled_(i, k) = true;
+  };
+  for (const Joint& j : model_.joints)
+    if (j.cut) coupleSupports(j.parentMarker.body, j.childMarker.body);
+  for (const ForceElement& f : model_.forces)
+    if (f.kind != ForceElement::Kind::AppliedForce) coupleSupports(f.marker1.body, f.marker2.body);
   // The joint-space tangent costs a residual per rate and a factorization
   // of its pattern: the recursive form pays off once that pattern holds
   // about a dense block of kRecursiveNewtonMatrixRates rates (a chain of
   // that length). Not automatically with cut joints: their multipliers
-  // couple every body between the loop's ends in the elimination, and
-  // for many loops on a long path (R3's 40) the fill costs more than the
-  // joint-space LU (measured: 14 ms against 2 ms per factorization).
+  // couple every body between the loop's ends in the elimination (R3's
+  // 40 loops, 0.6 s at h = 5e-3: 41 ms against 6.8 ms in joint space).
   using Form = SolverOptions::NewtonMatrix;
   bool cutJoints = false;
   for (const Joint& j : model_.joints) cutJoints = cutJoints || j.cut;
@@ -69,6 +76,22 @@ System::System(Model model)
   recursiveMatrix_ = model_.analysis == Analysis::Dynamic && !model_.bodies.empty() &&
                      (model_.solver.newtonMatrix == Form::Recursive ||
                       (model_.solver.newtonMatrix == Form::Automatic && !cutJoints && coupled >= dense));
+  // Rates that no row shares go into one finite-difference column of the
+  // tangent together (Curtis, Powell & Reid 1974): greedy colouring, each
+  // rate the first colour that none of the rates sharing a row with it has.
+  // (The recursive form has its own tangent.)
+  std::vector<int> colourOf(n, -1);
+  std::vector<char> taken;
+  for (int k = 0; k < n && !recursiveMatrix_; ++k) {
+    taken.assign(n, 0);
+    for (int row = 0; row < n; ++row)
+      if (ratesCoupled_(row, k))
+        for (int other = 0; other < k; ++other)
+          if (ratesCoupled_(row, other)) taken[colourOf[other]] = 1;
+    colourOf[k] = int(std::find(taken.begin(), taken.end(), 0) - taken.begin());
+    if (colourOf[k] >= int(tangentColours_.size())) tangentColours_.resize(colourOf[k] + 1);
+    tangentColours_[colourOf[k]].push_back(k);
+  }
   // Blocks whose translation rates turn with a stored rotation: free nodes
   // (rdot in the world frame) and free joints (ddot in the parent marker
   // frame). Their rotation rates are in the turning frame already, and the
@@ -245,7 +268,8 @@ void System::weldForcesOnNodes(const VectorXd& lambda, VectorXd& r) const {
 }
 
 // Mass block analytic (B^T M B); velocity and configuration derivatives by
-// finite differences of the rigid residual, for now. Every entry that can be
+// finite differences of the rigid residual, for now, a residual per colour
+// of rates that share no row (tangentColours_). Every entry that can be
 // nonzero (ratesCoupled_) is emitted, zeros included, so the sparsity pattern
 // never changes.
 void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
@@ -259,20 +283,26 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
     VectorXd r0, r1, phi;
     rigidResidual(t, q, v, vdot, lambda, r0, phi);
     const double eps = 1e-7;
-    for (int i = 0; i < n; ++i) {
-      // Perturb q by eps e_i and v by (cC/cK) eps e_i: (r1 - r0)/eps = K e_i + (cC/cK) C e_i.
-      VectorXd dq = VectorXd::Zero(model_.velocityCount);
-      dq[i] = eps;
+    VectorXd dq = VectorXd::Zero(model_.velocityCount);
+    for (const std::vector<int>& colour : tangentColours_) {
+      // Perturb q by eps along the colour's rates and v by (cC/cK) times
+      // that: (r1 - r0)/eps = K e_i + (cC/cK) C e_i in the rows of rate i.
+      for (int i : colour) dq[i] = eps;
       Configuration qp = q;
       VectorXd vp = v;
       if (cK != 0.0) {
         retract(qp, dq);
-        vp[i] += cC / cK * eps;
+        vp += cC / cK * dq;
       } else {
-        vp[i] += eps;
+        vp += dq;
       }
       rigidResidual(t, qp, vp, vdot, lambda, r1, phi);
-      S.col(i) += (cK != 0.0 ? cK : cC) * (r1 - r0) / eps;
+      const double c = (cK != 0.0 ? cK : cC) / eps;
+      for (int i : colour) {
+        dq[i] = 0.0;
+        for (int row = 0; row < n; ++row)
+          if (ratesCoupled_(row, i)) S(row, i) += c * (r1[row] - r0[row]);
+      }
     }
     forwardKinematics(model_, data_, q, v, vdot);  // the workspace of q again, not of the last perturbation
   }
@@ -389,7 +419,7 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
 // mesh's residuals. The larger part is taken for the whole.
 double System::tangentCost() const {
   double rigid = 0.0;
-  if (!model_.bodies.empty()) rigid = recursiveMatrix_ ? 3.0 : double(model_.rigidVelocityCount + 1);
+  if (!model_.bodies.empty()) rigid = recursiveMatrix_ ? 3.0 : double(tangentColours_.size() + 1);
   const double flexible = model_.flexible.elements.empty() ? 0.0 : 16.0;
   return std::max({1.0, rigid, flexible});
 }

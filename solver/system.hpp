@@ -108,6 +108,7 @@ class System : public Dynamics {
   // constructor). Fixed by the topology, so the pattern never changes.
   std::vector<std::vector<int>> supportColumns_;
   Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> ratesCoupled_;
+  std::vector<std::vector<int>> tangentColours_;  // rates perturbed together (rigidTangent)
   // Three translation rates (from velocityOffset) that turn with a stored rotation.
   struct TurningBlock {
     int velocityOffset, rotation;

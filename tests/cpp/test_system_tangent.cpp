@@ -279,6 +279,77 @@ TEST(SparseRigidTangent, TreeWithWeldedBeamMatchesFiniteDifferences) {
   EXPECT_FALSE(coupled);
 }
 
+// Closed loops on a shallow tree: a chain of three four-bars (R3 with
+// N = 3; every crank on its ground pivot, every coupler on its crank's top,
+// the couplers' ends on the next cranks cut) with a spring-damper from
+// coupler 0 to crank 2 and a bushing from crank 1 to coupler 2. A cut joint
+// or force element couples only the rates that move its two bodies, so the
+// tangent is banded, and rates that share no row are perturbed together in
+// its finite differences; the whole matrix, rows and columns outside the
+// band included, against central differences of the residual.
+TEST(SparseRigidTangent, LoopsAndForceElementsCoupleOnlyTheRatesOfTheirBodies) {
+  std::string bodies, joints;
+  for (int i = 0; i <= 3; ++i) {
+    const std::string x = std::to_string(i);
+    bodies += std::string(i ? ", " : "") + R"({"name": "crank)" + x + R"(", "mass": 1, "inertia": [0.01, 0.09, 0.085],
+      "position": [)" + x + R"(, 0.5, 0], "orientation": {"x_axis": [0, 1, 0], "z_axis": [0, 0, 1]}})";
+    joints += std::string(i ? ", " : "") + R"({"name": "pivot)" + x + R"(", "type": "revolute", "parent": "ground",
+      "child": "crank)" + x + R"(", "position": [)" + x + ", 0, 0]}";
+    if (i == 3) continue;
+    const std::string next = std::to_string(i + 1);
+    bodies += R"(, {"name": "coupler)" + x + R"(", "mass": 1.2, "inertia": [0.02, 0.1, 0.11], "position": [)" + x +
+              R"(.5, 1, 0]})";
+    joints += R"(, {"name": "top)" + x + R"(", "type": "revolute", "parent": "crank)" + x + R"(", "child": "coupler)" + x +
+              R"(", "position": [)" + x + R"(, 1, 0]}, {"name": "end)" + x + R"(", "type": "revolute", "parent": "coupler)" +
+              x + R"(", "child": "crank)" + next + R"(", "position": [)" + next + R"(, 1, 0], "cut": true})";
+  }
+  const std::string loops = R"({"format": "mfbd-scene/1", "name": "loops", "gravity": [0, -9.81, 0], "bodies": [)" +
+                            bodies + R"(], "joints": [)" + joints + "]";
+  // Loops alone: crank 0's rate and crank 3's share no row, so a tangent
+  // costs fewer residuals (one per colour, and the unperturbed one) than
+  // one per rate.
+  EXPECT_LT(System(assemble(parseScene(loops + "}"))).tangentCost(), 7.0 + 1.0);
+  const std::string scene = loops + R"(, "forces": [
+      {"name": "spring", "type": "spring_damper", "body1": "coupler0", "point1": [0.3, 1, 0], "body2": "crank2",
+       "point2": [2, 0.7, 0], "stiffness": 40, "damping": 2},
+      {"name": "bushing", "type": "bushing", "body1": "crank1", "body2": "coupler2", "position": [1.5, 0.8, 0],
+       "stiffness": [10, 20, 30, 1, 2, 3], "damping": [0.1, 0.2, 0.3, 0.01, 0.02, 0.03]}]})";
+  System system(assemble(parseScene(scene)));
+  const int n = system.velocityCount();
+  ASSERT_EQ(n, 7);
+  ASSERT_EQ(system.constraintCount(), 15);
+  const double t = 0.1, eps = 1e-6;
+  const IntegratorState s = randomState(system, t, 5);
+  for (const auto& [cC, cK] : {std::pair{0.0, 1.0}, std::pair{1.0, 0.0}}) {
+    Triplets iteration, jacobian;
+    system.tangent(t, s.q, s.v, s.vdot, s.lambda, 0.0, cC, cK, iteration, jacobian);
+    const Eigen::MatrixXd S = dense(iteration, n, n);
+    Eigen::MatrixXd Sfd(n, n);
+    for (int i = 0; i < n; ++i) {
+      Configuration qp = s.q, qm = s.q;
+      VectorXd vp = s.v, vm = s.v, d = VectorXd::Zero(n);
+      d[i] = eps;
+      if (cK != 0.0) {
+        system.retract(qp, d);
+        system.retract(qm, -d);
+      } else {
+        vp[i] += eps;
+        vm[i] -= eps;
+      }
+      Sfd.col(i) = (evaluate(system, t, qp, vp, s.vdot, s.lambda).r - evaluate(system, t, qm, vm, s.vdot, s.lambda).r) /
+                   (2 * eps);
+    }
+    EXPECT_LT((S - Sfd).cwiseAbs().maxCoeff(), 1e-5 * Sfd.cwiseAbs().maxCoeff())
+        << (cK != 0.0 ? "K" : "C") << ":\n" << S << "\n\n" << Sfd;
+  }
+  // Crank 0 and crank 3 share no loop and no force element.
+  Triplets iteration, jacobian;
+  system.tangent(t, s.q, s.v, s.vdot, s.lambda, 1.0, 1.0, 1.0, iteration, jacobian);
+  const int first = system.model().joints[findJoint(system.model(), "pivot0")].velocityOffset;
+  const int last = system.model().joints[findJoint(system.model(), "pivot3")].velocityOffset;
+  for (const auto& e : iteration) EXPECT_FALSE(e.row() == first && e.col() == last);
+}
+
 // Modified Newton across large rotations (GeneralizedAlpha with
 // Dynamics::turnWithRotations): the Newton matrix of a state turned rigidly
 // by Q is D S D^T, D the turns of the blocks whose translation rates live in

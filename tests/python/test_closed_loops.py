@@ -175,9 +175,10 @@ def test_bricard_with_its_redundant_constraint_keeps_its_energy():
 
 
 def n_four_bar_outputs(N):
-    names = [f"crank{i}.{q}.{c}" for i in range(N + 1) for q in ("position", "velocity") for c in "xy"]
-    names += [f"crank{i}.angular_velocity.z" for i in range(N + 1)]
-    names += [f"crank{i}.orientation.{c}" for i in range(N + 1) for c in "wxyz"]
+    bars = [f"crank{i}" for i in range(N + 1)] + [f"coupler{i}" for i in range(N)]
+    names = [f"{b}.{q}.{c}" for b in bars for q in ("position", "velocity") for c in "xy"]
+    names += [f"{b}.angular_velocity.z" for b in bars]
+    names += [f"{b}.orientation.{c}" for b in bars for c in "wxyz"]
     return names
 
 
@@ -187,26 +188,20 @@ def bar_energy(position, velocity, omega):
 
 
 def n_four_bar_checks(r, N):
-    """Largest cut-pivot violation |Phi|, largest crank angle against crank 0
-    (parallelogram branch: all equal), and the energy history. Each coupler
-    joins two crank tops: its state follows from theirs."""
-    axis, top, top_velocity, energy = {}, {}, {}, 0.0
-    for i in range(N + 1):
-        q = np.column_stack([r[f"crank{i}.orientation.{c}"] for c in "xyzw"])
-        axis[i] = Rotation.from_quat(q).as_matrix()[:, :2, 0]  # along the crank, pivot to top
-        p = np.column_stack([r[f"crank{i}.position.x"], r[f"crank{i}.position.y"]])
-        v = np.column_stack([r[f"crank{i}.velocity.x"], r[f"crank{i}.velocity.y"]])
-        w = r[f"crank{i}.angular_velocity.z"]
-        top[i] = p + 0.5 * axis[i]
-        top_velocity[i] = v + 0.5 * w[:, None] * np.column_stack([-axis[i][:, 1], axis[i][:, 0]])
-        energy = energy + bar_energy(p, v, w)
-    for i in range(N):
-        d, dv = top[i + 1] - top[i], top_velocity[i + 1] - top_velocity[i]
-        omega = (d[:, 0] * dv[:, 1] - d[:, 1] * dv[:, 0]) / np.sum(d * d, axis=1)
-        energy = energy + bar_energy(0.5 * (top[i] + top[i + 1]), 0.5 * (top_velocity[i] + top_velocity[i + 1]), omega)
-    phi = max(np.max(np.abs(top[i] - axis[i] - [i, 0.0])) for i in range(1, N + 1))
-    branch = max(np.max(np.abs(axis[0][:, 0] * axis[i][:, 1] - axis[0][:, 1] * axis[i][:, 0]))
-                 for i in range(1, N + 1))
+    """Largest violation |Phi| of the cut joints (coupler i's end on crank
+    i + 1's top), largest crank angle against crank 0 (parallelogram
+    branch: all equal), and the energy history of all 2N + 1 bars."""
+    axis, centre, energy = {}, {}, 0.0
+    for b in [f"crank{i}" for i in range(N + 1)] + [f"coupler{i}" for i in range(N)]:
+        q = np.column_stack([r[f"{b}.orientation.{c}"] for c in "xyzw"])
+        axis[b] = Rotation.from_quat(q).as_matrix()[:, :2, 0]  # crank: pivot to top; coupler: its top to its end
+        centre[b] = np.column_stack([r[f"{b}.position.x"], r[f"{b}.position.y"]])
+        v = np.column_stack([r[f"{b}.velocity.x"], r[f"{b}.velocity.y"]])
+        energy = energy + bar_energy(centre[b], v, r[f"{b}.angular_velocity.z"])
+    phi = max(np.max(np.abs(centre[f"coupler{i}"] + 0.5 * axis[f"coupler{i}"]
+                            - centre[f"crank{i + 1}"] - 0.5 * axis[f"crank{i + 1}"])) for i in range(N))
+    branch = max(np.max(np.abs(axis["crank0"][:, 0] * axis[f"crank{i}"][:, 1]
+                               - axis["crank0"][:, 1] * axis[f"crank{i}"][:, 0])) for i in range(1, N + 1))
     return phi, branch, energy
 
 
