@@ -286,10 +286,19 @@ AdvanceResult Simulation::doStep(double H) {
 // factorization of its own: a master that reads no reactions skips it.
 void Simulation::evaluateOutputs(bool reactions) {
   if (outputsCurrent_ && (reactionsCurrent_ || !reactions)) return;
+  outputsCurrent_ = true;
+  reactionsCurrent_ = reactions;
+  // Positions, velocities and the like need the kinematics alone (at the
+  // end of every doStep, for the quaternions' signs); reactions the forces,
+  // of the multipliers (outputLambda_) of consistent accelerations.
+  if (!reactions) {
+    system_.evaluateKinematics(state_.t, state_.q, state_.v, state_.vdot);
+    return;
+  }
   VectorXd vdot = state_.vdot, lambda = state_.lambda;
   const bool consistentSolve = (inputsChangedSinceStep_ || system_.constraintCount() > 0) &&
                                scene_.analysis == Analysis::Dynamic;
-  if (reactions && consistentSolve) {
+  if (consistentSolve) {
     IntegratorState probe = state_;
     std::string message;
     if (stepper_->initialize(system_, probe, message)) {
@@ -299,8 +308,6 @@ void Simulation::evaluateOutputs(bool reactions) {
   }
   system_.evaluate(state_.t, state_.q, state_.v, vdot, lambda);
   outputLambda_ = lambda;
-  outputsCurrent_ = true;
-  reactionsCurrent_ = reactions || !consistentSolve;
 }
 
 double Simulation::read(const Quantity& q) {

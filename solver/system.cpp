@@ -26,6 +26,7 @@ System::System(Model model)
   const int n = model_.rigidVelocityCount;
   std::vector<int> bodyOfColumn(n, kGroundIndex);
   supportColumns_.resize(model_.bodies.size());
+  weldOnNodes_.assign(model_.flexibleBodyJoints.size(), Vec6::Zero());
   for (int b = 0; b < int(model_.bodies.size()); ++b) {
     for (int at = b; at != kGroundIndex; at = model_.bodies[at].parent) {
       const Joint& j = model_.joints[model_.bodies[at].inboardJoint];
@@ -231,6 +232,8 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
     const Vec6 onBody = -c.jacobianChild.transpose() * lambda.segment<6>(w.constraintOffset);
     data_.appliedForce[w.virtualBody] += onBody.head<3>();
     data_.appliedTorque[w.virtualBody] += onBody.tail<3>();
+    weldOnNodes_[&w - model_.flexibleBodyJoints.data()] =
+        c.jacobianParent.transpose() * lambda.segment<6>(w.constraintOffset);
   }
   jointForces(q, v, tau_);
   backwardNewtonEuler(model_, data_, tau_, r);
@@ -251,16 +254,16 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
     const bool inertia = model_.analysis == Analysis::Dynamic;
     if (!flexibleResidual(model_.flexible, nodes_, model_.gravity, flexibleInputs_, t, inertia, r))
       r.setConstant(std::numeric_limits<double>::quiet_NaN());  // a failed iterate: the step is retried smaller
-    if (lambda.size() > 0) weldForcesOnNodes(lambda, r);
+    if (lambda.size() > 0) weldForcesOnNodes(r);
   }
 }
 
-// Node rows of the flexible body joints' forces: W^T Phi_node^T lambda.
-void System::weldForcesOnNodes(const VectorXd& lambda, VectorXd& r) const {
+// Node rows of the flexible body joints' forces: W^T Phi_node^T lambda,
+// Phi_node^T lambda from the residual of the tree (weldOnNodes_).
+void System::weldForcesOnNodes(VectorXd& r) const {
   for (const FlexibleBodyJoint& w : model_.flexibleBodyJoints) {
     const NodeState& n = nodes_[w.node];
-    const ConstraintEvaluation c = evaluateJointConstraint(w.weld, poseOfNode(n), poseOf(data_, w.virtualBody));
-    const Vec6 g = nodeVariation(n).transpose() * (c.jacobianParent.transpose() * lambda.segment<6>(w.constraintOffset));
+    const Vec6 g = nodeVariation(n).transpose() * weldOnNodes_[&w - model_.flexibleBodyJoints.data()];
     const FlexNode& node = model_.flexible.nodes[w.node];
     for (int k = 0; k < 6; ++k)
       if (node.dof[k] >= 0) r[node.dof[k]] += node.P.col(k).dot(g);
@@ -741,6 +744,11 @@ void System::evaluate(double t, const Configuration& q, const VectorXd& v, const
                       const VectorXd& lambda) {
   VectorXd phi;
   nodesAndTree(t, q, v, vdot, lambda, phi);
+}
+
+void System::evaluateKinematics(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot) {
+  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
+  if (!model_.bodies.empty()) forwardKinematics(model_, data_, q, v, vdot);
 }
 
 // Node states, then the tree's residual into rigid_ and the constraints into

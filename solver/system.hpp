@@ -70,6 +70,9 @@ class System : public Dynamics {
   // Kinematics, joint reactions and node states of a state into data() and
   // nodes() (for outputs).
   void evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda);
+  // Kinematics and node states alone: what outputs of positions, velocities,
+  // orientations, springs and flexible body joint violations read.
+  void evaluateKinematics(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot);
 
  private:
   void nodesAndTree(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
@@ -79,7 +82,7 @@ class System : public Dynamics {
   void rigidTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                     double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
   void jointForces(const Configuration& q, const VectorXd& v, VectorXd& tau) const;
-  void weldForcesOnNodes(const VectorXd& lambda, VectorXd& r) const;
+  void weldForcesOnNodes(VectorXd& r) const;
   void recursiveTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                         double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
   void forceElementTangent(double cC, double cK, Triplets& iteration);
@@ -109,6 +112,9 @@ class System : public Dynamics {
   std::vector<std::vector<int>> supportColumns_;
   Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> ratesCoupled_;
   std::vector<std::vector<int>> tangentColours_;  // rates perturbed together (rigidTangent)
+  // Phi_node^T lambda of each flexible body joint, from the last residual of
+  // the tree (the node side of its force, weldForcesOnNodes).
+  std::vector<Vec6> weldOnNodes_;
   // Three translation rates (from velocityOffset) that turn with a stored rotation.
   struct TurningBlock {
     int velocityOffset, rotation;
