@@ -15,6 +15,7 @@ import ctypes
 import pathlib
 import re
 import shutil
+import subprocess
 import sys
 import tempfile
 import time
@@ -47,13 +48,11 @@ def best_of(run, repeats, min_total=0.5, max_repeats=25):
 class FmuRun:
     """One FMU instance, for timing a run and reading its Newton statistics.
 
-    In the timed loop, step() and get() call the FMU's fmi2DoStep and
-    fmi2GetReal through bare ctypes prototypes over the FMU's library,
-    with addresses of arrays made once, which is what a C importer does;
-    fmpy's checked wrappers (argument logging, status checks) would add
-    about 2 us of Python per call, 5 ms of 10 ms in F3 at n = 2 (1,000
-    doSteps and reads), and its ctypes entry points (typed arguments
-    converted at every call) 0.2 us. Solver statistics
+    sample() runs the timed loop of fmi2DoStep and fmi2GetReal in C
+    (fmu_loop.c) over the FMU's own entry points, as a C importer does;
+    step() and get() call them through bare ctypes prototypes (fmpy's
+    checked wrappers would add about 2 us of Python per call, 5 ms of
+    10 ms in F3 at n = 2: 1,000 doSteps and reads). Solver statistics
     come from the `logStatistics` line that fmi2Terminate writes (no log
     callback into Python at every step). The Newton tolerance is
     NEWTON_TOLERANCE (Exudyn's) unless `parameters` sets solver.tolerance."""
@@ -74,6 +73,9 @@ class FmuRun:
         self._get_real = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
                                           ctypes.c_void_p)(("fmi2GetReal", library))
         self._reads = {}  # names -> (value references, values)
+        # The entry points' addresses, for the C loop of sample().
+        self._do_step_address = ctypes.cast(self._do_step, ctypes.c_void_p).value
+        self._get_real_address = ctypes.cast(self._get_real, ctypes.c_void_p).value
 
     def initialize(self):
         assert self.slave.call("enterInitializationMode") == 0, self.slave.messages()
@@ -112,36 +114,43 @@ class FmuRun:
         """Initializes, steps to `stop` by `output`, reading `names` at every
         communication point (t = 0 included), and frees the instance.
         Returns (samples, one row per point, the wall time of the run,
-        statistics). The timed loop is fmi2DoStep and fmi2GetReal alone,
-        each read going straight into its row of the array (the rows'
-        addresses taken before the clock starts), as a C importer's loop:
-        no Python object per sample."""
+        statistics). The timed loop of doSteps and reads runs in C
+        (benchmarks/fmu_loop.c), as a co-simulation master's does, each read
+        straight into its row of the array: the time is the FMU's, not a
+        Python loop's (about 1.5 us per communication step, a third of a
+        small model's)."""
         steps = int(round(stop / output))
         count = len(names)
         samples = np.zeros((steps + 1, count))
-        reference_array = (ctypes.c_uint * count)(*(self.slave.vr[n] for n in names))
-        references = ctypes.addressof(reference_array)
-        rows = [samples.ctypes.data + i * samples.strides[0] for i in range(steps + 1)]  # addresses
-        component, do_step, get_real = self._component, self._do_step, self._get_real
-        t, failed = 0.0, None
+        references = (ctypes.c_uint * count)(*(self.slave.vr[n] for n in names))
+        reached = ctypes.c_double(0.0)
+        loop = fmu_loop()
         try:
             start = time.perf_counter()
             self.initialize()
-            if get_real(component, references, count, rows[0]):
-                failed = t
-            for i in range(1, steps + 1):
-                if failed is not None or do_step(component, t, output, 1) or \
-                        get_real(component, references, count, rows[i]):
-                    failed = t
-                    break
-                t += output
+            failed = loop(self._do_step_address, self._get_real_address, self._component, output, steps, references,
+                          count, samples.ctypes.data, ctypes.byref(reached))
             wall = time.perf_counter() - start
-            assert failed is None, f"fmi2DoStep or fmi2GetReal failed at t = {failed}:\n{self.slave.messages()}"
-            self.t = t
+            assert failed == 0, f"fmi2DoStep or fmi2GetReal failed at t = {reached.value}:\n{self.slave.messages()}"
+            self.t = reached.value
             statistics = self.statistics()
         finally:
             self.free()
         return samples, wall, statistics
+
+
+def fmu_loop():
+    """benchmarks/fmu_loop.c's sample(), built (cc -O2) into the build folder
+    when missing or older than its source."""
+    source = ROOT / "benchmarks" / "fmu_loop.c"
+    library = FMUS.parent / "fmu_loop.so"
+    if not library.exists() or library.stat().st_mtime < source.stat().st_mtime:
+        subprocess.run(["cc", "-O2", "-shared", "-fPIC", str(source), "-o", str(library)], check=True)
+    function = ctypes.CDLL(str(library)).sample
+    function.restype = ctypes.c_int
+    function.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_double, ctypes.c_int,
+                         ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p, ctypes.c_void_p]
+    return function
 
 
 class SceneFactory:
