@@ -2,6 +2,7 @@
 // coordinate counts, and a spanning tree rooted at ground.
 #include <map>
 #include <set>
+#include <vector>
 
 #include "scene/joint_dofs.hpp"
 #include "scene/scene.hpp"
@@ -105,17 +106,35 @@ void checkOutputs(const Scene& scene, const std::set<std::string>& bodies) {
 
 }  // namespace
 
-// A body that is the child of several joints none of which is declared cut
-// keeps its first as the tree joint; the others are cut (a closed loop), and
-// the choice is noted for the log.
+// The spanning tree, where the scene does not declare every cut: breadth
+// first from ground over the joints not declared cut, each body taking as
+// its tree joint the first (in scene order) of the joints that reach it
+// from the shallowest level. The shallowest tree moves each body by the
+// fewest joint rates, which keeps the joint-space Newton matrix sparse (an
+// N-four-bar: a band, where cutting the pivots makes an 81-deep chain and
+// a dense matrix). The other joints are cut (a closed loop), noted for the
+// log. Bodies that no joint reaches are left for validateScene to name.
 void chooseCutJoints(Scene& scene) {
-  std::set<std::string> hasParent;
-  for (JointSpec& j : scene.joints) {
-    if (j.cut) continue;
-    if (!hasParent.insert(j.child).second) {
-      j.cut = true;
-      scene.notes.push_back("joint '" + j.name + "' closes a loop at body '" + j.child + "': cut (Lagrange multipliers)");
+  std::set<std::string> reached = {kGround};
+  std::vector<bool> tree(scene.joints.size(), false);
+  for (std::set<std::string> level = {kGround}; !level.empty();) {
+    std::set<std::string> next;
+    for (std::size_t k = 0; k < scene.joints.size(); ++k) {
+      const JointSpec& j = scene.joints[k];
+      if (j.cut || !level.count(j.parent) || reached.count(j.child)) continue;
+      tree[k] = true;
+      reached.insert(j.child);
+      next.insert(j.child);
     }
+    level = std::move(next);
+  }
+  std::set<std::string> hasParent;  // joints from bodies no tree joint reaches: the first per child
+  for (std::size_t k = 0; k < scene.joints.size(); ++k) {
+    JointSpec& j = scene.joints[k];
+    if (j.cut || tree[k]) continue;
+    if (!reached.count(j.child) && hasParent.insert(j.child).second) continue;
+    j.cut = true;
+    scene.notes.push_back("joint '" + j.name + "' closes a loop at body '" + j.child + "': cut (Lagrange multipliers)");
   }
 }
 

@@ -247,6 +247,40 @@ def test_n_four_bar_starts_exactly_at_its_singular_configuration(tmp_path):
     assert np.max(np.abs(energy - energy[0])) < 1e-5 * (2 * N + 1) * G
 
 
+def test_undeclared_cuts_give_the_shallowest_tree(tmp_path):
+    # The N-four-bar with no joint declared cut, its joints listed as the
+    # chain crank0, coupler0, crank1, ... (each crank's pivot after the
+    # coupler end that reaches it): the assembly cuts the couplers' ends,
+    # not the pivots, so every crank hangs on its pivot (a tree of two
+    # levels), logs each cut, and moves as the scene that names them.
+    sys.path.insert(0, str(EXAMPLES / "n_four_bar"))
+    from make_scene import n_four_bar
+    N = 4
+    declared = n_four_bar(N)
+    pivots = {j["name"]: j for j in declared["joints"] if j["name"].startswith("pivot")}
+    chain = []
+    for j in declared["joints"]:
+        if j["name"].startswith("pivot") and j["name"] != "pivot0":
+            continue
+        chain.append({k: v for k, v in j.items() if k != "cut"})
+        if j["name"].startswith("end"):
+            chain.append(pivots["pivot" + str(int(j["name"][3:]) + 1)])
+    undeclared = dict(declared, joints=chain, name="n_four_bar_auto")
+    fmu = packed(undeclared, tmp_path)
+    s = Slave(fmu, instance_name="auto")
+    try:
+        assert s.instantiate(logging_on=True)
+        cuts = [m for _, _, m in s.log if "closes a loop" in m]
+        assert cuts == [f"joint 'end{i}' closes a loop at body 'crank{i + 1}': cut (Lagrange multipliers)"
+                        for i in range(N)], cuts
+    finally:
+        s.free()
+    outputs = n_four_bar_outputs(N)
+    auto = simulate_fmu(fmu, stop_time=2.0, output=outputs)
+    named = simulate_fmu(packed(declared, tmp_path), stop_time=2.0, output=outputs)
+    assert max(np.max(np.abs(auto[name] - named[name])) for name in outputs) < 1e-12
+
+
 def test_drives_that_conflict_through_a_loop_end_in_a_discard_naming_them(tmp_path):
     # Crank and rocker of the four-bar both driven: one row too many, and the
     # two rates do not fit the loop. The step is discarded, naming the rows.
