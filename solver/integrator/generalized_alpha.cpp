@@ -80,7 +80,6 @@ bool GeneralizedAlpha::restartAfterInputJump(Dynamics& system, IntegratorState& 
   VectorXd rhs = VectorXd::Zero(S.rows());
   rhs.head(n) = -r;
   const VectorXd jump = solver.solve(rhs);
-  keptRate_ = 0.0;  // the forces jumped: the kept matrix's rate is measured again
   s.vdot += jump.head(n);
   s.a += jump.head(n);
   s.lambda += jump.segment(n, m);
@@ -100,7 +99,6 @@ SparseMatrix GeneralizedAlpha::newtonMatrix(Dynamics& system, const IntegratorSt
 
 bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial, double h) {
   const MatrixFactors c = matrixFactors(h);
-  keptRate_ = 0.0;  // measured anew with the new matrix
   if (assembleIterationMatrix(system, trial, c.cM, c.cC, c.cK))
     solver_.analyzePattern(assembledIterationMatrix(), pivotOrder(system, c.cM));
   if (solver_.factorize(assembledIterationMatrix()) != LinearSolver::Status::Ok) return false;
@@ -220,32 +218,12 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     // correction of 1e-13 leaves ~1e-19, and a further iteration would only
     // correct round-off. Under quadratic (fresh-matrix) convergence rho
     // falls from one iteration to the next, so the estimate is pessimistic.
-    // At the first correction the rate is the one this kept matrix showed
-    // in an earlier substep (Hairer & Wanner IV.8 start from the last
-    // step's rate too), scaled up with the correction where that is
-    // larger than the one it was measured after (the nonlinear part of the
-    // error grows with it). A stale matrix's rate is linear in the
-    // correction (a cantilever: 1e-6 at corrections of 1e-8 to 6e-6), so
-    // at a tolerance of 1e-12 one correction of 1e-7 suffices.
-    const double rho = k > 0                ? size / previous
-                       : withFreshMatrix < 0 && keptRate_ > 0.0 ? keptRate_ * std::max(1.0, size / keptRateAfter_)
-                                                                : 1.0;
-    if (k == 1 && withFreshMatrix < 0) {
-      firstRate_ = rho;
-      keptRate_ = rho;
-      keptRateAfter_ = previous;
-    }
+    const double rho = k > 0 ? size / previous : 1.0;
+    if (k == 1 && withFreshMatrix < 0) firstRate_ = rho;
     const double remaining = rho < 1.0 ? rho / (1.0 - rho) * size : HUGE_VAL;
     const double floor = std::max({0.01 * options_.tolerance, coordinateFloor, 4.0 * correctionNoise_});
     const bool small = size <= floor || remaining <= options_.tolerance;
-    // The constraints' residual is that of the iterate before this
-    // correction; after a first correction, it shrinks by the rate too.
-    const double phiLeft = (m == 0 ? 0.0 : phi.cwiseAbs().maxCoeff()) * (k == 0 && size > floor ? rho : 1.0);
-    if (small && phiLeft <= std::max(options_.tolerance, phiFloor)) {
-      // A substep that stops at its first correction measures no rate: the
-      // estimate doubles, so a kept matrix's rate is measured again within
-      // a few substeps (Hairer & Wanner's rate grows as rate^0.8 per step).
-      if (k == 0 && size > floor) keptRate_ = std::min(1.0, 2.0 * keptRate_);
+    if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= std::max(options_.tolerance, phiFloor))) {
       lastIterations_ = k + 1;
       substepsSinceFactorization_ += 1.0;
       trial.substeps = s.substeps + 1;

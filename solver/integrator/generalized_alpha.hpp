@@ -6,9 +6,7 @@
 //   [ Phi_q                            0       ] [ dlambda/beta'] = [ -Phi     ]
 // Modified Newton: the factorised matrix is kept across substeps, turned with
 // the bodies that rotated since (Dynamics::turnWithRotations), and refreshed
-// when the contraction slows (see substep and beginAdvance); a substep
-// stops at its first correction when the rate the kept matrix showed
-// before says the error left is below the tolerance.
+// when the contraction slows (see substep and beginAdvance).
 // Newton failure halves the substep down to h_min; the caller keeps the state
 // of the step start and reports a discarded step.
 #pragma once
@@ -84,10 +82,6 @@ class GeneralizedAlpha : public TimeStepper {
   double lastIterations_ = 1e9;  // Newton iterations of the last accepted substep (none yet: many)
   double substepsSinceFactorization_ = 0.0;  // accepted since the current factorization
   double firstRate_ = 0.0;  // contraction at the first check of the last substep with a kept matrix
-  // The kept matrix's rate for a stop at the first correction (0: not
-  // measured since the factorization or an input jump) and the correction
-  // it was measured after (see substep).
-  double keptRate_ = 0.0, keptRateAfter_ = 0.0;
 };
 
 }  // namespace mfbd
