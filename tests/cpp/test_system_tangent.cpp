@@ -89,6 +89,34 @@ IntegratorState randomState(const System& system, double t, unsigned seed) {
   return s;
 }
 
+// Central differences of the residual (r) and constraints (phi) along each
+// rate: of the configuration along the retraction (cK != 0: the columns of
+// K and Phi_q) or of the rates (cK == 0: the columns of C).
+struct Differences {
+  Eigen::MatrixXd r, phi;
+};
+
+Differences centralDifferences(System& system, const IntegratorState& s, double cK, double eps) {
+  const int n = system.velocityCount();
+  Differences d{Eigen::MatrixXd(n, n), Eigen::MatrixXd(system.constraintCount(), n)};
+  for (int i = 0; i < n; ++i) {
+    Configuration qp = s.q, qm = s.q;
+    VectorXd vp = s.v, vm = s.v, step = VectorXd::Zero(n);
+    step[i] = eps;
+    if (cK != 0.0) {
+      system.retract(qp, step);
+      system.retract(qm, -step);
+    } else {
+      vp[i] += eps;
+      vm[i] -= eps;
+    }
+    const Evaluation p = evaluate(system, s.t, qp, vp, s.vdot, s.lambda), m = evaluate(system, s.t, qm, vm, s.vdot, s.lambda);
+    d.r.col(i) = (p.r - m.r) / (2 * eps);
+    d.phi.col(i) = (p.phi - m.phi) / (2 * eps);
+  }
+  return d;
+}
+
 class CoupledSystem : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -246,22 +274,8 @@ TEST(SparseRigidTangent, TreeWithWeldedBeamMatchesFiniteDifferences) {
     Triplets iteration, jacobian;
     system.tangent(t, q, v, vdot, lambda, 0.0, cC, cK, iteration, jacobian);
     const Eigen::MatrixXd S = dense(iteration, n, n), G = dense(jacobian, m, n);
-    Eigen::MatrixXd Sfd(n, n), Gfd(m, n);
-    for (int i = 0; i < n; ++i) {
-      Configuration qp = q, qm = q;
-      VectorXd vp = v, vm = v, d = VectorXd::Zero(n);
-      d[i] = eps;
-      if (cK != 0.0) {
-        system.retract(qp, d);
-        system.retract(qm, -d);
-      } else {
-        vp[i] += eps;
-        vm[i] -= eps;
-      }
-      const Evaluation p = evaluate(system, t, qp, vp, vdot, lambda), mm = evaluate(system, t, qm, vm, vdot, lambda);
-      Sfd.col(i) = (p.r - mm.r) / (2 * eps);
-      Gfd.col(i) = (p.phi - mm.phi) / (2 * eps);
-    }
+    const Differences fd = centralDifferences(system, s, cK, eps);
+    const Eigen::MatrixXd &Sfd = fd.r, &Gfd = fd.phi;
     for (int i = 0; i < n; ++i)
       EXPECT_LT((S - Sfd).row(i).cwiseAbs().maxCoeff(), 1e-5 * std::max(1.0, Sfd.row(i).cwiseAbs().maxCoeff()))
           << "row " << i << (cK != 0.0 ? " of K" : " of C");
@@ -324,21 +338,7 @@ TEST(SparseRigidTangent, LoopsAndForceElementsCoupleOnlyTheRatesOfTheirBodies) {
     Triplets iteration, jacobian;
     system.tangent(t, s.q, s.v, s.vdot, s.lambda, 0.0, cC, cK, iteration, jacobian);
     const Eigen::MatrixXd S = dense(iteration, n, n);
-    Eigen::MatrixXd Sfd(n, n);
-    for (int i = 0; i < n; ++i) {
-      Configuration qp = s.q, qm = s.q;
-      VectorXd vp = s.v, vm = s.v, d = VectorXd::Zero(n);
-      d[i] = eps;
-      if (cK != 0.0) {
-        system.retract(qp, d);
-        system.retract(qm, -d);
-      } else {
-        vp[i] += eps;
-        vm[i] -= eps;
-      }
-      Sfd.col(i) = (evaluate(system, t, qp, vp, s.vdot, s.lambda).r - evaluate(system, t, qm, vm, s.vdot, s.lambda).r) /
-                   (2 * eps);
-    }
+    const Eigen::MatrixXd Sfd = centralDifferences(system, s, cK, eps).r;
     EXPECT_LT((S - Sfd).cwiseAbs().maxCoeff(), 1e-5 * Sfd.cwiseAbs().maxCoeff())
         << (cK != 0.0 ? "K" : "C") << ":\n" << S << "\n\n" << Sfd;
   }
