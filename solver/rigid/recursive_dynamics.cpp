@@ -23,19 +23,24 @@ struct RateTerms {
 };
 
 // Hv, Hw: the joint's motion columns, qdot its rates (fixed-size blocks for a
-// single-rate joint, see forwardBody).
-template <class Columns, class Rates>
+// single-rate joint, see forwardBody). Slides: false where Hv and its rate
+// terms vanish (revolute, spherical, fixed), whose slide terms are left out.
+template <bool Slides, class Columns, class Rates>
 RateTerms rateTerms(const JointMotion& m, const Columns& Hv, const Columns& Hw, const Vec3& parentVelocity,
                     const Vec3& parentOmega, const Mat3& AP, const Mat3& AC, const Vec3& pC, const Vec3& dr,
                     const Rates& qdot) {
   RateTerms t;
   const Vec3 wRel = AC * (Hw * qdot);
-  const Vec3 vSlide = AP * (Hv * qdot);
   t.angularVelocity = parentOmega + wRel;
-  t.velocity = parentVelocity + parentOmega.cross(dr) + vSlide + pC.cross(wRel);
+  t.velocity = parentVelocity + parentOmega.cross(dr) + pC.cross(wRel);
   t.angularBias = t.angularVelocity.cross(wRel) + AC * m.HwDotQdot;
-  t.linearBias = parentOmega.cross(t.velocity - parentVelocity) + parentOmega.cross(vSlide) + AP * m.HvDotQdot +
-                 t.angularVelocity.cross(pC).cross(wRel) + pC.cross(t.angularBias);
+  t.linearBias = parentOmega.cross(t.velocity - parentVelocity) + t.angularVelocity.cross(pC).cross(wRel) +
+                 pC.cross(t.angularBias);
+  if constexpr (Slides) {
+    const Vec3 vSlide = AP * (Hv * qdot);
+    t.velocity += vSlide;
+    t.linearBias += 2.0 * parentOmega.cross(vSlide) + AP * m.HvDotQdot;
+  }
   return t;
 }
 
@@ -46,7 +51,7 @@ RateTerms rateTerms(const JointMotion& m, const Columns& Hv, const Columns& Hw, 
 // -> 0.44 us per substep, double pendulum 3.2 -> 2.5). Flattened (every
 // call inside inlined): with five instantiations GCC stopped inlining
 // Eigen's small assignment loops into them (pendulum +7 %).
-template <int D>
+template <int D, bool Slides>
 [[gnu::flatten]] void forwardBody(const Joint& jt, const Configuration& q, const VectorXd& v,
                                   const VectorXd& vdot, const BodyKinematics& p, BodyKinematics& c,
                                   JointKinematics& jk) {
@@ -69,17 +74,20 @@ template <int D>
   jk.childMarkerOffset = pC;
   jk.motionSubspace.resize(6, n);
   jk.motionSubspace.template bottomRows<3>() = AC * Hw;
-  jk.motionSubspace.template topRows<3>() = AP * Hv + skew(pC) * jk.motionSubspace.template bottomRows<3>();
+  if constexpr (Slides)
+    jk.motionSubspace.template topRows<3>() = AP * Hv + skew(pC) * jk.motionSubspace.template bottomRows<3>();
+  else
+    jk.motionSubspace.template topRows<3>() = skew(pC) * jk.motionSubspace.template bottomRows<3>();
 
   // Velocities Y_j = X Y_i + S qdot; accelerations Ydot_j = X Ydot_i + S qddot + bias.
   const Vec3 dr = c.position - p.position;
-  const RateTerms t = rateTerms(m, Hv, Hw, p.velocity, p.angularVelocity, AP, AC, pC, dr, qdot);
+  const RateTerms t = rateTerms<Slides>(m, Hv, Hw, p.velocity, p.angularVelocity, AP, AC, pC, dr, qdot);
   c.velocity = t.velocity;
   c.angularVelocity = t.angularVelocity;
   const Vec3 angularRel = AC * (Hw * qddot);
   c.angularAcceleration = p.angularAcceleration + angularRel + t.angularBias;
-  c.acceleration = p.acceleration + p.angularAcceleration.cross(dr) + AP * (Hv * qddot) + pC.cross(angularRel) +
-                   t.linearBias;
+  c.acceleration = p.acceleration + p.angularAcceleration.cross(dr) + pC.cross(angularRel) + t.linearBias;
+  if constexpr (Slides) c.acceleration += AP * (Hv * qddot);
 }
 
 }  // namespace
@@ -94,11 +102,17 @@ void forwardKinematics(const Model& model, Data& data, const Configuration& q, c
     BodyKinematics& c = data.body[i];
     JointKinematics& jk = data.joint[b.inboardJoint];
     switch (jt.dofs) {
-      case 0: forwardBody<0>(jt, q, v, vdot, p, c, jk); break;
-      case 1: forwardBody<1>(jt, q, v, vdot, p, c, jk); break;
-      case 3: forwardBody<3>(jt, q, v, vdot, p, c, jk); break;
-      case 6: forwardBody<6>(jt, q, v, vdot, p, c, jk); break;
-      default: forwardBody<Eigen::Dynamic>(jt, q, v, vdot, p, c, jk);
+      case 0: forwardBody<0, false>(jt, q, v, vdot, p, c, jk); break;
+      case 1:
+        if (jt.type == JointType::Revolute) forwardBody<1, false>(jt, q, v, vdot, p, c, jk);
+        else forwardBody<1, true>(jt, q, v, vdot, p, c, jk);
+        break;
+      case 3:
+        if (jt.type == JointType::Spherical) forwardBody<3, false>(jt, q, v, vdot, p, c, jk);
+        else forwardBody<3, true>(jt, q, v, vdot, p, c, jk);
+        break;
+      case 6: forwardBody<6, true>(jt, q, v, vdot, p, c, jk); break;
+      default: forwardBody<Eigen::Dynamic, true>(jt, q, v, vdot, p, c, jk);
     }
   }
 }
@@ -117,7 +131,7 @@ BiasRateDerivatives biasRateDerivatives(const Model& model, const Data& data, co
   VectorXd qdot = v.segment(jt.velocityOffset, jt.dofs);
   auto bias = [&](const Vec3& parentVelocity, const Vec3& parentOmega, const VectorXd& rates) {
     const JointMotion m = jointMotion(jt, q, rates);
-    const RateTerms t = rateTerms(m, m.Hv, m.Hw, parentVelocity, parentOmega, AP, AC, pC, dr, rates);
+    const RateTerms t = rateTerms<true>(m, m.Hv, m.Hw, parentVelocity, parentOmega, AP, AC, pC, dr, rates);
     Vec6 out;
     out << t.linearBias, t.angularBias;
     return out;
