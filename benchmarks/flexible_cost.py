@@ -17,9 +17,9 @@ target). With --phases also results/flexible_cost_phases.csv from
 benchmarks/flexible_phases.cpp: one Newton iteration taken apart (residual,
 tangent, assembly, factorization, solve, retraction), ns per element.
 Newton stops at the increment tolerance of the precision-work studies
-(peer_common.NEWTON_TOLERANCE, 1e-12, as Exudyn there; --tolerance), where
-most substeps end at their first correction; the solver's default, 1e-14,
-takes two. A study, not a test: nothing here asserts a time.
+(peer_common.NEWTON_TOLERANCE, 1e-12, as Exudyn there; --tolerance); every
+substep takes two corrections, as at the solver's default 1e-14.
+A study, not a test: nothing here asserts a time.
 """
 import argparse
 import csv

@@ -288,9 +288,7 @@ void Simulation::evaluateOutputs(bool reactions) {
   if (outputsCurrent_ && (reactionsCurrent_ || !reactions)) return;
   outputsCurrent_ = true;
   reactionsCurrent_ = reactions;
-  // Positions, velocities and the like need the kinematics alone (at the
-  // end of every doStep, for the quaternions' signs); reactions the forces,
-  // of the multipliers (outputLambda_) of consistent accelerations.
+  // The kinematics alone: what doStep evaluates for the quaternions' signs.
   if (!reactions) {
     system_.evaluateKinematics(state_.t, state_.q, state_.v, state_.vdot);
     return;
