@@ -211,6 +211,28 @@ Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) const {
   return x;
 }
 
+namespace {
+// P A = L U solved by plain loops: Eigen's triangular solves dispatch to
+// blocked kernels whose set-up outweighs the arithmetic for the few
+// unknowns of a small tree (a pendulum's substep: two solves of one
+// unknown, 6 % of its time in the profile).
+constexpr int kLoopSolveMaximum = 16;
+
+void loopSolve(const Eigen::PartialPivLU<Eigen::MatrixXd>& lu, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  const Eigen::MatrixXd& LU = lu.matrixLU();
+  const int* perm = lu.permutationP().indices().data();
+  const int n = int(LU.rows());
+  x.resize(n);
+  for (int i = 0; i < n; ++i) x[perm[i]] = b[i];
+  for (int i = 1; i < n; ++i)
+    for (int j = 0; j < i; ++j) x[i] -= LU(i, j) * x[j];
+  for (int i = n - 1; i >= 0; --i) {
+    for (int j = i + 1; j < n; ++j) x[i] -= LU(i, j) * x[j];
+    x[i] /= LU(i, i);
+  }
+}
+}  // namespace
+
 void LinearSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
   if (impl_->sparse && impl_->factoredByBlocks)
     impl_->blocks.solve(b, x);
@@ -218,6 +240,8 @@ void LinearSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
     x = impl_->columns.transpose() * impl_->klu->solve(impl_->rows * b);
   else if (impl_->sparse)
     x = impl_->klu->solve(b);
+  else if (b.size() <= kLoopSolveMaximum)
+    loopSolve(impl_->dense, b, x);
   else
     x = impl_->dense.solve(b);
 }

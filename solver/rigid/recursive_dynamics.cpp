@@ -66,18 +66,24 @@ template <int D, bool Slides>
   const Mat3 AP = p.orientation * jt.parentMarker.orientation;
   const Mat3 AC = AP * m.rotation;
   c.orientation = AC * jt.childMarker.orientation.transpose();
-  const Vec3 pC = c.orientation * jt.childMarker.position;  // centre of mass -> child marker
-  c.position = p.position + p.orientation * jt.parentMarker.position + AP * m.translation - pC;
+  // Centre of mass -> child marker from AC, not from the orientation just
+  // stored: read back in other vector packets than it was written in, it
+  // stalls the loads (pendulum's forwardKinematics 70 -> 63 ns).
+  const Vec3 pC = AC * (jt.childMarker.orientation.transpose() * jt.childMarker.position);
+  c.position = p.position + p.orientation * jt.parentMarker.position - pC;
+  if constexpr (Slides) c.position += AP * m.translation;  // zero for the others (75 -> 63 ns)
 
   // Motion subspace at the child's centre of mass, world frame.
   jk.childMarkerOrientation = AC;
   jk.childMarkerOffset = pC;
   jk.motionSubspace.resize(6, n);
   jk.motionSubspace.template bottomRows<3>() = AC * Hw;
-  if constexpr (Slides)
-    jk.motionSubspace.template topRows<3>() = AP * Hv + skew(pC) * jk.motionSubspace.template bottomRows<3>();
-  else
-    jk.motionSubspace.template topRows<3>() = skew(pC) * jk.motionSubspace.template bottomRows<3>();
+  // pC x w by columns: skew(pC) built entry by entry stalls its product.
+  for (int k = 0; k < n; ++k) {
+    const Vec3 w = jk.motionSubspace.template block<3, 1>(3, k);
+    jk.motionSubspace.template block<3, 1>(0, k) = pC.cross(w);
+  }
+  if constexpr (Slides) jk.motionSubspace.template topRows<3>() += AP * Hv;
 
   // Velocities Y_j = X Y_i + S qdot; accelerations Ydot_j = X Ydot_i + S qddot + bias.
   const Vec3 dr = c.position - p.position;

@@ -1,7 +1,7 @@
 // The linear solvers behind the Newton matrix: block LU of a beam line's
 // block-tridiagonal matrix against dense LU, and the fall-back to the
 // pivoting sparse LU when block elimination would need a pivot from
-// another block.
+// another block; the small dense LU's own substitution loops.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -95,6 +95,26 @@ TEST(LinearSolver, FallsBackToPivotingLUWhereBlockEliminationWouldNeedIt) {
   const SparseMatrix regular = blockTridiagonalMatrix({6, 6, 6, 6, 6}, 4.0, 12u);
   ASSERT_EQ(solver.factorize(regular), LinearSolver::Status::Ok);
   EXPECT_LT(relativeError(solver.solve(b), Eigen::MatrixXd(regular).partialPivLu().solve(b)), 1e-13);
+}
+
+TEST(LinearSolver, SmallDenseMatricesSolveWithPivotingAtEverySize) {
+  // Sizes on both sides of the substitution loops' limit (16), each with a
+  // zero first pivot that only a row exchange gets past: x solves A x = b
+  // to round-off of the matrix's conditioning.
+  std::mt19937 random(5u);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (int n : {1, 2, 3, 6, 16, 17, 40}) {
+    Eigen::MatrixXd dense = Eigen::MatrixXd::NullaryExpr(n, n, [&] { return uniform(random); });
+    dense.diagonal().array() += 3.0;
+    if (n > 1) dense(0, 0) = 0.0;
+    const SparseMatrix A = dense.sparseView();
+    LinearSolver solver;
+    solver.analyzePattern(A);
+    ASSERT_EQ(solver.factorize(A), LinearSolver::Status::Ok) << "n = " << n;
+    const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(n, 2.0, -1.0);
+    const Eigen::VectorXd x = solver.solve(b);
+    EXPECT_LT((dense * x - b).norm() / b.norm(), 1e-13) << "n = " << n;
+  }
 }
 
 }  // namespace
