@@ -107,6 +107,17 @@ BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
 bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
                          const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta, Vec12& f);
 
+// The same for up to kForceLanes elements at once (vector lanes: the
+// residual's element loop); false if any of them is undefined or not finite.
+constexpr int kForceLanes = 4;
+struct ElementInputs {
+  const CorotationalBeam* beam;
+  double damping;
+  const NodePose *pose1, *pose2;
+  const NodeVelocity *velocity1, *velocity2;
+};
+bool internalForceVectors(int count, const ElementInputs elements[], Vec12 f[]);
+
 // Stress resultants at the element ends in the corotated element frame,
 // force (N, Vy, Vz) and moment (T, My, Mz); at each end the action of the
 // part at larger x on the part at smaller x (N > 0 in tension), computed

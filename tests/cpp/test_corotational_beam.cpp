@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -222,6 +223,75 @@ TEST(CorotationalBeam, DampingTangentsMatchFiniteDifferences) {
   std::printf("[ damping   ] max rel error C: %.2e, K (with damping): %.2e\n", worstC, worstK);
   EXPECT_LT(worstC, 1e-8);
   EXPECT_LT(worstK, 1e-6);
+}
+
+// The residual's forces, four elements side by side in vector lanes
+// (internalForceVectors) and one at a time (internalForceVector), against
+// the tangent path's f: lanes that take different branches (node frames
+// aligned with the element or not, damping or none, local rotations small
+// enough for the short series, for the long one, or beyond both), groups
+// of four and a last group of three.
+TEST(CorotationalBeam, ResidualForcesInVectorLanesMatchTheTangentPath) {
+  Rng rng;
+  struct Case {
+    Element e;
+    NodePose n1, n2;
+    NodeVelocity v1, v2;
+    double damping;
+  };
+  std::vector<Case> cases;
+  for (int k = 0; k < 11; ++k) {
+    Case c;
+    if (k % 3 == 0) {  // node frames the element's own: C = I exactly
+      c.e.ref1 = NodePose{Vec3::Zero(), Mat3::Identity()};
+      c.e.ref2 = NodePose{Vec3(1.2, 0, 0), Mat3::Identity()};
+      c.e.beam = CorotationalBeam::fromReference(c.e.ref1, c.e.ref2, Vec3::UnitY(), balancedSection());
+      ASSERT_TRUE(c.e.beam.identityC1 && c.e.beam.identityC2);
+    } else {
+      c.e = randomElement(rng, balancedSection());
+    }
+    // local rotations ~1e-4 (short series), ~0.05 (long series), ~0.4 (logSO3)
+    const double size = k % 4 == 0 ? 1e-4 : k % 4 == 1 ? 0.05 : 0.4;
+    const Mat3 Q = expSO3(rng.direction() * rng.uniform(0, 2 * kPi));
+    c.n1 = rigidlyMoved(NodePose{c.e.ref1.r + rng.vector(-size, size), expSO3(rng.vector(-size, size)) * c.e.ref1.A},
+                        Q, rng.vector(-5, 5));
+    c.n2 = NodePose{c.n1.r + Q * (c.e.ref2.r - c.e.ref1.r + rng.vector(-size, size)),
+                    Q * expSO3(rng.vector(-size, size)) * c.e.ref2.A};
+    c.v1 = NodeVelocity{rng.vector(-2, 2), rng.vector(-3, 3)};
+    c.v2 = NodeVelocity{rng.vector(-2, 2), rng.vector(-3, 3)};
+    c.damping = k % 2 == 0 ? 0.0 : 0.05;
+    cases.push_back(c);
+  }
+  double worst = 0.0;
+  for (std::size_t first = 0; first < cases.size(); first += kForceLanes) {
+    const int count = int(std::min<std::size_t>(kForceLanes, cases.size() - first));
+    ElementInputs inputs[kForceLanes];
+    for (int i = 0; i < count; ++i) {
+      const Case& c = cases[first + i];
+      inputs[i] = {&c.e.beam, c.damping, &c.n1, &c.n2, &c.v1, &c.v2};
+    }
+    Vec12 f[kForceLanes];
+    ASSERT_TRUE(internalForceVectors(count, inputs, f));
+    for (int i = 0; i < count; ++i) {
+      const Case& c = cases[first + i];
+      const BeamForces reference = internalForces(c.e.beam, c.n1, c.n2, c.v1, c.v2, c.damping, false);
+      ASSERT_TRUE(reference.valid);
+      Vec12 one;
+      ASSERT_TRUE(internalForceVector(c.e.beam, c.n1, c.n2, c.v1, c.v2, c.damping, one));
+      worst = std::max({worst, (f[i] - reference.f).norm() / reference.f.norm(),
+                        (one - reference.f).norm() / reference.f.norm()});
+    }
+  }
+  std::printf("[ lanes     ] max rel error of f: %.2e\n", worst);
+  EXPECT_LT(worst, 1e-12);
+  // One element with a collapsed chord among four: the group reports it.
+  ElementInputs inputs[kForceLanes];
+  for (int i = 0; i < kForceLanes; ++i) {
+    const Case& c = cases[i];
+    inputs[i] = {&c.e.beam, c.damping, &c.n1, i == 2 ? &c.n1 : &c.n2, &c.v1, &c.v2};
+  }
+  Vec12 f[kForceLanes];
+  EXPECT_FALSE(internalForceVectors(kForceLanes, inputs, f));
 }
 
 // ---------------------------------------------------------------------------
