@@ -608,7 +608,9 @@ struct ElementForce {
 
 Vector3<double> fromEigen(const Vec3& a) { return {a.x(), a.y(), a.z()}; }
 Vec3 toEigen(const Vector3<double>& a) { return Vec3(a.x, a.y, a.z); }
-Matrix3<double> fromEigen(const Mat3& M) { return {{fromEigen(Vec3(M.col(0))), fromEigen(Vec3(M.col(1))), fromEigen(Vec3(M.col(2)))}}; }
+Matrix3<double> fromEigen(const Mat3& M) {
+  return {{fromEigen(Vec3(M.col(0))), fromEigen(Vec3(M.col(1))), fromEigen(Vec3(M.col(2)))}};
+}
 
 ElementState<double> elementState(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
                                   const NodeVelocity& v1, const NodeVelocity& v2) {
