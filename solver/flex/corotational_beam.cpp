@@ -433,7 +433,7 @@ double archStrain(const Vec7& e, Vec7& gradient) { return archStrain<double>(e, 
 // 3 <-> 6; pair[0] = 0).
 template <class T>
 struct ElementConstants {
-  T L0, EA, damping;
+  T L0, EA, damping, mass;
   T diagonal[7], pair[7];
 };
 
@@ -442,6 +442,7 @@ ElementConstants<double> elementConstants(const CorotationalBeam& beam, double d
   k.L0 = beam.L0;
   k.EA = beam.section.EA;
   k.damping = dampingBeta;
+  k.mass = 0.0;
   const Mat7& Kl = beam.localStiffness;
   for (int i = 0; i < 7; ++i) {
     k.diagonal[i] = Kl(i, i);
@@ -598,11 +599,15 @@ struct ElementState {
   Vector3<T> chord;      // r2 - r1
   Vector3<T> chordRate;  // v2 - v1
   Vector3<T> spin[2];    // C_i^T omega_i
+  // for the inertia (mass > 0)
+  Vector3<T> chordAcceleration;  // a2 - a1
+  Vector3<T> spinRate[2];        // C_i^T omegadot_i
+  Vector3<T> acceleration[2];    // a_i - g
 };
 
 template <class T>
 struct ElementForce {
-  Vector3<T> force;      // on node 1 (world); node 2's is its opposite
+  Vector3<T> force[2];   // on node i (world)
   Vector3<T> moment[2];  // on node i, in R_i's frame (C_i times it: the node frame)
 };
 
@@ -624,10 +629,24 @@ ElementState<double> elementState(const CorotationalBeam& beam, const NodePose& 
   return s;
 }
 
+// With the inertia's accelerations (gravity subtracted).
+ElementState<double> elementState(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
+                                  const NodeVelocity& v1, const NodeVelocity& v2, const NodeAcceleration& a1,
+                                  const NodeAcceleration& a2, const Vec3& gravity) {
+  ElementState<double> s = elementState(beam, n1, n2, v1, v2);
+  s.chordAcceleration = fromEigen(Vec3(a2.a - a1.a));
+  s.spinRate[0] = fromEigen(beam.identityC1 ? a1.omegaDot : Vec3(beam.C1.transpose() * a1.omegaDot));
+  s.spinRate[1] = fromEigen(beam.identityC2 ? a2.omegaDot : Vec3(beam.C2.transpose() * a2.omegaDot));
+  s.acceleration[0] = fromEigen(Vec3(a1.a - gravity));
+  s.acceleration[1] = fromEigen(Vec3(a2.a - gravity));
+  return s;
+}
+
 // f = [force; C1 moment_1; -force; C2 moment_2].
 void storeForce(const CorotationalBeam& beam, const ElementForce<double>& out, Vec12& f) {
-  const Vec3 force = toEigen(out.force), m1 = toEigen(out.moment[0]), m2 = toEigen(out.moment[1]);
-  f << force, beam.identityC1 ? m1 : Vec3(beam.C1 * m1), -force, beam.identityC2 ? m2 : Vec3(beam.C2 * m2);
+  const Vec3 m1 = toEigen(out.moment[0]), m2 = toEigen(out.moment[1]);
+  f << toEigen(out.force[0]), beam.identityC1 ? m1 : Vec3(beam.C1 * m1), toEigen(out.force[1]),
+      beam.identityC2 ? m2 : Vec3(beam.C2 * m2);
 }
 
 template <class T>
@@ -700,6 +719,41 @@ Vector3<T> inverseTangentTimes(const Vector3<T>& theta, const T& e, const Vector
   return (T(1.0) - e * squaredNorm(theta)) * y + (e * dot(theta, y)) * theta + (transposed ? -half : half);
 }
 
+// Consistent inertia less weight (flex/consistent_mass.hpp) added to the
+// element force, in the frames R_i (the element axis d_i = C_i e1 is e1
+// there): F = M_p (pddot - g_p), f += [F1 + k; L0 e1 x (R1^T F3); F2 - k;
+// L0 e1 x (R2^T F4)], k = (L0 / l) P (F3 + F4).
+template <class T>
+void addInertiaForce(const ElementState<T>& s, const ElementConstants<T>& k, ElementForce<T>& out) {
+  using std::sqrt;  // and mfbd::sqrt(Lanes)
+  static constexpr double shape[4][4] = {{140, 70, 21, -14}, {70, 140, 14, -21}, {21, 14, 4, -3}, {-14, -21, -3, 4}};
+  const T L0 = k.L0;
+  const T l = sqrt(squaredNorm(s.chord));
+  const Vector3<T> e = s.chord / l, &cdot = s.chordRate, &cddot = s.chordAcceleration;
+  const T lDot = dot(e, cdot);
+  const Vector3<T> eDot = (cdot - lDot * e) / l;
+  const Vector3<T> eDdot = (cddot - dot(e, cddot) * e - (T(2.0) * lDot) * eDot - dot(eDot, cdot) * e) / l;
+  // L0 (omegadot x e1 + omega x (omega x e1)) in R_i's frame, turned to the world
+  Vector3<T> p[4] = {s.acceleration[0], s.acceleration[1], s.acceleration[0], s.acceleration[1]};
+  for (int i = 0; i < 2; ++i) {
+    const Vector3<T>&w = s.spin[i], &wdot = s.spinRate[i];
+    const Vector3<T> local{-(w.y * w.y + w.z * w.z), wdot.z + w.x * w.y, w.x * w.z - wdot.y};
+    p[2 + i] = s.R[i] * (L0 * local) - L0 * eDdot;
+  }
+  const T m = k.mass / T(420.0);
+  Vector3<T> F[4];
+  for (int r = 0; r < 4; ++r)
+    F[r] = m * (T(shape[r][0]) * p[0] + T(shape[r][1]) * p[1] + T(shape[r][2]) * p[2] + T(shape[r][3]) * p[3]);
+  const Vector3<T> G = F[2] + F[3];
+  const Vector3<T> kk = (L0 / l) * (G - dot(e, G) * e);
+  out.force[0] = out.force[0] + F[0] + kk;
+  out.force[1] = out.force[1] + F[1] - kk;
+  for (int i = 0; i < 2; ++i) {
+    const Vector3<T> g = transposeTimes(s.R[i], F[2 + i]);  // e1 x g = (0, -g_z, g_y)
+    out.moment[i] = out.moment[i] + L0 * Vector3<T>{T(0.0), -g.z, g.y};
+  }
+}
+
 // The same f as internalForces (corotatedFrame, localForce,
 // strainMapTranspose), written for the residual's element loop: no
 // Kinematics workspace, no tangent-operator matrices, products with the
@@ -755,11 +809,13 @@ bool elementForce(const ElementState<T>& s, const ElementConstants<T>& k, Elemen
   const Vector3<T> w = -(R0 * m0 + R1 * m1);
   const Vector3<T> chord = chordSpinTranspose(w);
   const T axial = dot(e1, w);
-  out.force = -chord - fl[0] * e1;
+  out.force[0] = -chord - fl[0] * e1;
+  out.force[1] = chord + fl[0] * e1;
   out.moment[0] = axial * twist0 + m0;
   out.moment[1] = axial * twist1 + m1;
+  if (!allZero(k.mass)) addInertiaForce(s, k, out);
   // A NaN or infinity anywhere (u, theta, the frame) reaches the force; so does its sum.
-  const Vector3<T> sum = out.force + out.moment[0] + out.moment[1];
+  const Vector3<T> sum = out.force[0] + out.force[1] + out.moment[0] + out.moment[1];
   return allFinite(sum.x + sum.y + sum.z);
 }
 
@@ -773,28 +829,35 @@ bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const
   return true;
 }
 
-// Four elements side by side in vector lanes (math/lanes.hpp), flattened:
-// every kernel function inlined. Compiled for the baseline x86-64 (each
-// operation on four lanes is two SSE2 instructions): a variant for AVX2
-// and FMA, chosen at load time, was 6 % faster but rounds differently
-// (fused multiply-adds), and an FMU should give the same numbers on every
-// machine.
-[[gnu::flatten]] bool internalForceVectors(int count, const ElementInputs elements[], Vec12 f[]) {
+namespace {
+
+// Four elements side by side in vector lanes (math/lanes.hpp): gathered,
+// computed, stored. Inlined into each of the two variants below.
+[[gnu::always_inline]] inline bool elementForcesInLanes(int count, const ElementInputs elements[],
+                                                        const Vec3& gravity, Vec12 f[]) {
   ElementState<Lanes> s;
   ElementConstants<Lanes> k;
+  static const NodeAcceleration still;
   for (int i = 0; i < Lanes::kCount; ++i) {
     const ElementInputs& e = elements[std::min(i, count - 1)];  // spare lanes repeat the last element
-    const ElementState<double> one = elementState(*e.beam, *e.pose1, *e.pose2, *e.velocity1, *e.velocity2);
+    const bool inertia = e.mass > 0.0;
+    const ElementState<double> one =
+        elementState(*e.beam, *e.pose1, *e.pose2, *e.velocity1, *e.velocity2, inertia ? *e.acceleration1 : still,
+                     inertia ? *e.acceleration2 : still, gravity);
     for (int j = 0; j < 2; ++j) {
       for (int c = 0; c < 3; ++c) setLane(s.R[j].col[c], i, one.R[j].col[c]);
       setLane(s.spin[j], i, one.spin[j]);
+      setLane(s.spinRate[j], i, one.spinRate[j]);
+      setLane(s.acceleration[j], i, one.acceleration[j]);
     }
     setLane(s.chord, i, one.chord);
     setLane(s.chordRate, i, one.chordRate);
+    setLane(s.chordAcceleration, i, one.chordAcceleration);
     const ElementConstants<double> c = elementConstants(*e.beam, e.damping);
     k.L0.set(i, c.L0);
     k.EA.set(i, c.EA);
     k.damping.set(i, c.damping);
+    k.mass.set(i, e.mass);
     for (int j = 0; j < 7; ++j) {
       k.diagonal[j].set(i, c.diagonal[j]);
       k.pair[j].set(i, c.pair[j]);
@@ -803,8 +866,37 @@ bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const
   ElementForce<Lanes> out;
   if (!elementForce(s, k, out)) return false;
   for (int i = 0; i < count; ++i)
-    storeForce(*elements[i].beam, {lane(out.force, i), {lane(out.moment[0], i), lane(out.moment[1], i)}}, f[i]);
+    storeForce(*elements[i].beam,
+               {{lane(out.force[0], i), lane(out.force[1], i)}, {lane(out.moment[0], i), lane(out.moment[1], i)}},
+               f[i]);
   return true;
+}
+
+}  // namespace
+
+// Flattened: every kernel function inlined. The baseline x86-64 variant
+// does an operation on four lanes as two SSE2 instructions, the AVX2 one as
+// one; AVX2 alone, without FMA: the same operations, rounded alike, so both
+// give the same numbers to the bit (a fused multiply-add would not).
+[[gnu::flatten]] bool elementForceVectorsBaseline(int count, const ElementInputs elements[], const Vec3& gravity,
+                                                  Vec12 f[]) {
+  return elementForcesInLanes(count, elements, gravity, f);
+}
+
+[[gnu::flatten]] __attribute__((target("avx2"))) bool elementForceVectorsAvx2(int count,
+                                                                               const ElementInputs elements[],
+                                                                               const Vec3& gravity, Vec12 f[]) {
+  return elementForcesInLanes(count, elements, gravity, f);
+}
+
+bool hasAvx2() {
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  return avx2;
+}
+
+bool elementForceVectors(int count, const ElementInputs elements[], const Vec3& gravity, Vec12 f[]) {
+  return hasAvx2() ? elementForceVectorsAvx2(count, elements, gravity, f)
+                   : elementForceVectorsBaseline(count, elements, gravity, f);
 }
 
 BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,

@@ -107,16 +107,25 @@ BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
 bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
                          const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta, Vec12& f);
 
-// The same for up to kForceLanes elements at once (vector lanes: the
-// residual's element loop); false if any of them is undefined or not finite.
+// The residual's element forces, kForceLanes elements at once (vector
+// lanes): internalForceVector's f plus, for an element with mass > 0, its
+// consistent inertia less weight (consistentInertiaForce, flex/
+// consistent_mass.hpp; the accelerations are read only then). False if any
+// element's frame is undefined or a force not finite.
 constexpr int kForceLanes = 4;
 struct ElementInputs {
   const CorotationalBeam* beam;
-  double damping;
+  double damping, mass;
   const NodePose *pose1, *pose2;
   const NodeVelocity *velocity1, *velocity2;
+  const NodeAcceleration *acceleration1, *acceleration2;
 };
-bool internalForceVectors(int count, const ElementInputs elements[], Vec12 f[]);
+bool elementForceVectors(int count, const ElementInputs elements[], const Vec3& gravity, Vec12 f[]);
+// Its two variants, the one for this processor chosen by the above: for
+// the baseline x86-64 and, where hasAvx2(), for AVX2 (the same numbers).
+bool elementForceVectorsBaseline(int count, const ElementInputs elements[], const Vec3& gravity, Vec12 f[]);
+bool elementForceVectorsAvx2(int count, const ElementInputs elements[], const Vec3& gravity, Vec12 f[]);
+bool hasAvx2();
 
 // Stress resultants at the element ends in the corotated element frame,
 // force (N, Vy, Vz) and moment (T, My, Mz); at each end the action of the

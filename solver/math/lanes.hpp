@@ -5,9 +5,9 @@
 // passed). One element's 3-vectors fill vector registers badly (three
 // entries in packets of two or four) and chain long latencies (a square
 // root, a division) one element after the other; four elements side by side
-// fill the registers and share every latency. Built for the baseline x86-64
-// (an operation on four lanes: two SSE2 instructions), so the numbers are
-// the same on every machine.
+// fill the registers and share every latency. An operation on four lanes is
+// two SSE2 instructions on the baseline x86-64, one with AVX2 (a kernel may
+// be compiled for both, see elementForceVectors).
 #pragma once
 #include <cmath>
 

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "flex/beam_section.hpp"
+#include "flex/consistent_mass.hpp"
 #include "flex/corotational_beam.hpp"
 #include "flex/nodal_inertia.hpp"
 #include "math/rotation.hpp"
@@ -225,20 +226,24 @@ TEST(CorotationalBeam, DampingTangentsMatchFiniteDifferences) {
   EXPECT_LT(worstK, 1e-6);
 }
 
-// The residual's forces, four elements side by side in vector lanes
-// (internalForceVectors) and one at a time (internalForceVector), against
-// the tangent path's f: lanes that take different branches (node frames
-// aligned with the element or not, damping or none, local rotations small
-// enough for the short series, for the long one, or beyond both), groups
-// of four and a last group of three.
-TEST(CorotationalBeam, ResidualForcesInVectorLanesMatchTheTangentPath) {
+// The residual's element forces, four elements side by side in vector
+// lanes (elementForceVectors: internal force plus consistent inertia less
+// weight) against the tangent path's internal force and the one-element
+// consistentInertiaForce: lanes that take different branches (node frames
+// aligned with the element or not, damping or none, mass or none, local
+// rotations small enough for the short series, for the long one, or
+// beyond both), groups of four and a last group of three. The baseline
+// and AVX2 variants agree to the bit.
+TEST(CorotationalBeam, ResidualForcesInVectorLanesMatchTheOneElementPaths) {
   Rng rng;
   struct Case {
     Element e;
     NodePose n1, n2;
     NodeVelocity v1, v2;
-    double damping;
+    NodeAcceleration a1, a2;
+    double damping, mass;
   };
+  const Vec3 gravity(0.3, -9.81, 1.2);
   std::vector<Case> cases;
   for (int k = 0; k < 11; ++k) {
     Case c;
@@ -259,7 +264,10 @@ TEST(CorotationalBeam, ResidualForcesInVectorLanesMatchTheTangentPath) {
                     Q * expSO3(rng.vector(-size, size)) * c.e.ref2.A};
     c.v1 = NodeVelocity{rng.vector(-2, 2), rng.vector(-3, 3)};
     c.v2 = NodeVelocity{rng.vector(-2, 2), rng.vector(-3, 3)};
+    c.a1 = NodeAcceleration{rng.vector(-20, 20), rng.vector(-30, 30)};
+    c.a2 = NodeAcceleration{rng.vector(-20, 20), rng.vector(-30, 30)};
     c.damping = k % 2 == 0 ? 0.0 : 0.05;
+    c.mass = k % 5 == 0 ? 0.0 : 2.4;
     cases.push_back(c);
   }
   double worst = 0.0;
@@ -268,30 +276,35 @@ TEST(CorotationalBeam, ResidualForcesInVectorLanesMatchTheTangentPath) {
     ElementInputs inputs[kForceLanes];
     for (int i = 0; i < count; ++i) {
       const Case& c = cases[first + i];
-      inputs[i] = {&c.e.beam, c.damping, &c.n1, &c.n2, &c.v1, &c.v2};
+      inputs[i] = {&c.e.beam, c.damping, c.mass, &c.n1, &c.n2, &c.v1, &c.v2, &c.a1, &c.a2};
     }
-    Vec12 f[kForceLanes];
-    ASSERT_TRUE(internalForceVectors(count, inputs, f));
+    Vec12 f[kForceLanes], baseline[kForceLanes];
+    ASSERT_TRUE(elementForceVectors(count, inputs, gravity, f));
+    ASSERT_TRUE(elementForceVectorsBaseline(count, inputs, gravity, baseline));
     for (int i = 0; i < count; ++i) {
       const Case& c = cases[first + i];
-      const BeamForces reference = internalForces(c.e.beam, c.n1, c.n2, c.v1, c.v2, c.damping, false);
-      ASSERT_TRUE(reference.valid);
+      const BeamForces internal = internalForces(c.e.beam, c.n1, c.n2, c.v1, c.v2, c.damping, false);
+      ASSERT_TRUE(internal.valid);
+      Vec12 reference = internal.f;
+      if (c.mass > 0.0)
+        reference += consistentInertiaForce(c.e.beam, c.mass, c.n1, c.v1, c.a1, c.n2, c.v2, c.a2, gravity);
       Vec12 one;
       ASSERT_TRUE(internalForceVector(c.e.beam, c.n1, c.n2, c.v1, c.v2, c.damping, one));
-      worst = std::max({worst, (f[i] - reference.f).norm() / reference.f.norm(),
-                        (one - reference.f).norm() / reference.f.norm()});
+      worst = std::max({worst, (f[i] - reference).norm() / reference.norm(),
+                        (one - internal.f).norm() / internal.f.norm()});
+      EXPECT_EQ(f[i], baseline[i]) << "element " << first + i;  // same variant or AVX2: bit for bit
     }
   }
-  std::printf("[ lanes     ] max rel error of f: %.2e\n", worst);
+  std::printf("[ lanes     ] max rel error of f: %.2e (AVX2 variant %s)\n", worst, hasAvx2() ? "used" : "absent");
   EXPECT_LT(worst, 1e-12);
   // One element with a collapsed chord among four: the group reports it.
   ElementInputs inputs[kForceLanes];
   for (int i = 0; i < kForceLanes; ++i) {
     const Case& c = cases[i];
-    inputs[i] = {&c.e.beam, c.damping, &c.n1, i == 2 ? &c.n1 : &c.n2, &c.v1, &c.v2};
+    inputs[i] = {&c.e.beam, c.damping, c.mass, &c.n1, i == 2 ? &c.n1 : &c.n2, &c.v1, &c.v2, &c.a1, &c.a2};
   }
   Vec12 f[kForceLanes];
-  EXPECT_FALSE(internalForceVectors(kForceLanes, inputs, f));
+  EXPECT_FALSE(elementForceVectors(kForceLanes, inputs, gravity, f));
 }
 
 // ---------------------------------------------------------------------------
