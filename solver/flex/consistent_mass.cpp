@@ -6,9 +6,6 @@ namespace {
 
 using Mat3x12 = Eigen::Matrix<double, 3, 12>;
 
-// int_0^1 N N^T dxi of the shape functions [1 - xi, xi, N2, N4] on
-// [r1; r2; b1; b2], times 420.
-constexpr double kShape[4][4] = {{140, 70, 21, -14}, {70, 140, 14, -21}, {21, 14, 4, -3}, {-14, -21, -3, 4}};
 
 // The chord c = r2 - r1 and its direction e = c / l with their rates:
 // edot = P cdot / l and eddot = (P cddot - 2 edot ldot - e (edot . cdot)) / l,
@@ -46,13 +43,13 @@ NodeTerms nodeTerms(const Mat3& C, double L0, const NodeVelocity& v, const NodeA
   return {d, L0 * (a.omegaDot.cross(d) + v.omega.cross(v.omega.cross(d)))};
 }
 
-// F = M_p (pddot - g_p) on [r1; r2; b1; b2] (world vectors; `mass` / 420 x kShape).
+// F = M_p (pddot - g_p) on [r1; r2; b1; b2] (world vectors; `mass` / 420 x kConsistentShape).
 template <class Block>
 std::array<Block, 4> shapeTimes(double mass, const std::array<Block, 4>& p) {
   const double m = mass / 420.0;
   std::array<Block, 4> F;
   for (int k = 0; k < 4; ++k)
-    F[k] = m * (kShape[k][0] * p[0] + kShape[k][1] * p[1] + kShape[k][2] * p[2] + kShape[k][3] * p[3]);
+    F[k] = m * (kConsistentShape[k][0] * p[0] + kConsistentShape[k][1] * p[1] + kConsistentShape[k][2] * p[2] + kConsistentShape[k][3] * p[3]);
   return F;
 }
 
@@ -174,7 +171,7 @@ ConsistentEnergy consistentEnergy(const CorotationalBeam& beam, double mass, con
                                   L0 * (n2.A * v2.omega.cross(d2) - c.eDot)}};
   ConsistentEnergy e;
   for (int k = 0; k < 4; ++k)
-    for (int m = 0; m < 4; ++m) e.kinetic += 0.5 * mass / 420.0 * kShape[k][m] * pdot[k].dot(pdot[m]);
+    for (int m = 0; m < 4; ++m) e.kinetic += 0.5 * mass / 420.0 * kConsistentShape[k][m] * pdot[k].dot(pdot[m]);
   // int r = (r1 + r2) / 2 + (b1 - b2) / 12, b_i = L0 (A_i d_i - e)
   const Vec3 b1 = L0 * (n1.A * d1 - c.e), b2 = L0 * (n2.A * d2 - c.e);
   e.gravity = -mass * gravity.dot(0.5 * (n1.r + n2.r) + (b1 - b2) / 12.0);

@@ -32,6 +32,11 @@
 
 namespace mfbd {
 
+// int_0^1 N N^T dxi of the shape functions [1 - xi, xi, N2, N4] on
+// [r1; r2; b1; b2], times 420 (M_p = rhoA L0 / 420 times it).
+inline constexpr double kConsistentShape[4][4] = {
+    {140, 70, 21, -14}, {70, 140, 14, -21}, {21, 14, 4, -3}, {-14, -21, -3, 4}};
+
 // The element's inertia minus weight f and its tangent
 //   S = cM df/d[a; omegadot] + cC df/d[v; omega] + cK df/d[dr; dtheta]
 // (velocities and accelerations held; nodal_inertia.hpp's conventions),

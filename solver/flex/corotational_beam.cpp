@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "flex/consistent_mass.hpp"
 #include "math/lanes.hpp"
 
 namespace mfbd {
@@ -719,14 +720,16 @@ Vector3<T> inverseTangentTimes(const Vector3<T>& theta, const T& e, const Vector
   return (T(1.0) - e * squaredNorm(theta)) * y + (e * dot(theta, y)) * theta + (transposed ? -half : half);
 }
 
-// Consistent inertia less weight (flex/consistent_mass.hpp) added to the
-// element force, in the frames R_i (the element axis d_i = C_i e1 is e1
-// there): F = M_p (pddot - g_p), f += [F1 + k; L0 e1 x (R1^T F3); F2 - k;
-// L0 e1 x (R2^T F4)], k = (L0 / l) P (F3 + F4).
+// Consistent inertia less weight added to the element force: the f of
+// consistentInertiaForce (flex/consistent_mass.hpp, whose one-element form
+// the tests hold this one to) in the frames R_i, where the element axis
+// d_i = C_i e1 is e1: F = M_p (pddot - g_p) on [r1; r2; b1; b2],
+// f += [F_r1 + k; L0 e1 x (R_1^T F_b1); F_r2 - k; L0 e1 x (R_2^T F_b2)],
+// k = (L0 / l) P (F_b1 + F_b2).
 template <class T>
 void addInertiaForce(const ElementState<T>& s, const ElementConstants<T>& k, ElementForce<T>& out) {
   using std::sqrt;  // and mfbd::sqrt(Lanes)
-  static constexpr double shape[4][4] = {{140, 70, 21, -14}, {70, 140, 14, -21}, {21, 14, 4, -3}, {-14, -21, -3, 4}};
+  const auto& shape = kConsistentShape;
   const T L0 = k.L0;
   const T l = sqrt(squaredNorm(s.chord));
   const Vector3<T> e = s.chord / l, &cdot = s.chordRate, &cddot = s.chordAcceleration;
