@@ -893,7 +893,10 @@ namespace {
 }
 
 bool hasAvx2() {
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+  static const bool avx2 = [] {
+    __builtin_cpu_init();  // harmless if done; needed if asked before the library's constructors ran
+    return __builtin_cpu_supports("avx2") != 0;
+  }();
   return avx2;
 }
 
