@@ -70,28 +70,15 @@ Eigen::Matrix<double, 12, Block::ColsAtCompileTime> mapTranspose(const std::arra
 
 }  // namespace
 
-// The same f as consistentInertia's, with vector operations only (the
-// residual evaluates it for every element in every Newton iteration).
-// Flattened, as internalForceVector: the residual's other element pass.
-[[gnu::flatten]] Vec12 consistentInertiaForce(const CorotationalBeam& beam, double mass, const NodePose& n1,
-                                              const NodeVelocity& v1, const NodeAcceleration& a1, const NodePose& n2,
-                                              const NodeVelocity& v2, const NodeAcceleration& a2,
-                                              const Vec3& gravity) {
-  const double L0 = beam.L0;
-  const Vec3 x = n2.r - n1.r;
-  const double l = x.norm();
-  const Vec3 e = x / l, cdot = v2.v - v1.v, cddot = a2.a - a1.a;
-  const double lDot = e.dot(cdot);
-  const Vec3 eDot = (cdot - lDot * e) / l;
-  const Vec3 eDdot = (cddot - e.dot(cddot) * e - 2.0 * lDot * eDot - eDot.dot(cdot) * e) / l;
-  const NodeTerms t1 = nodeTerms(beam.C1, L0, v1, a1), t2 = nodeTerms(beam.C2, L0, v2, a2);
-  const std::array<Vec3, 4> F = shapeTimes(mass, std::array<Vec3, 4>{{a1.a - gravity, a2.a - gravity,
-                                                                      n1.A * t1.local - L0 * eDdot,
-                                                                      n2.A * t2.local - L0 * eDdot}});
-  const Vec3 G = F[2] + F[3];
-  const Vec3 k = (L0 / l) * (G - e.dot(G) * e);
+// The one-element use of addInertiaForce (the residual's kernel, four
+// elements at a time in elementForceVectors).
+Vec12 consistentInertiaForce(const CorotationalBeam& beam, double mass, const NodePose& n1, const NodeVelocity& v1,
+                             const NodeAcceleration& a1, const NodePose& n2, const NodeVelocity& v2,
+                             const NodeAcceleration& a2, const Vec3& gravity) {
+  ElementForce<double> out{};
+  addInertiaForce(elementState(beam, n1, n2, v1, v2, a1, a2, gravity), beam.L0, mass, out);
   Vec12 f;
-  f << F[0] + k, L0 * t1.d.cross(n1.A.transpose() * F[2]), F[1] - k, L0 * t2.d.cross(n2.A.transpose() * F[3]);
+  storeForce(beam, out, f);
   return f;
 }
 

@@ -28,7 +28,10 @@
 // m2]. The rotary inertia of the section stays lumped at the nodes
 // (lumpedNodalInertia).
 #pragma once
+#include <cmath>
+
 #include "flex/corotational_beam.hpp"
+#include "flex/element_state.hpp"
 
 namespace mfbd {
 
@@ -52,6 +55,41 @@ struct ConsistentInertia {
 Vec12 consistentInertiaForce(const CorotationalBeam& beam, double mass, const NodePose& n1, const NodeVelocity& v1,
                              const NodeAcceleration& a1, const NodePose& n2, const NodeVelocity& v2,
                              const NodeAcceleration& a2, const Vec3& gravity);
+
+// consistentInertiaForce's f added to an element force, for one element or
+// four (flex/element_state.hpp), in the frames R_i, where the element axis
+// d_i = C_i e1 is e1: F = M_p (pddot - g_p) on [r1; r2; b1; b2],
+// f += [F_r1 + k; L0 e1 x (R_1^T F_b1); F_r2 - k; L0 e1 x (R_2^T F_b2)],
+// k = (L0 / l) P (F_b1 + F_b2).
+template <class T>
+void addInertiaForce(const ElementState<T>& s, const T& L0, const T& mass, ElementForce<T>& out) {
+  using std::sqrt;  // and mfbd::sqrt(Lanes)
+  const auto& shape = kConsistentShape;
+  const T l = sqrt(squaredNorm(s.chord));
+  const Vector3<T> e = s.chord / l, &cdot = s.chordRate, &cddot = s.chordAcceleration;
+  const T lDot = dot(e, cdot);
+  const Vector3<T> eDot = (cdot - lDot * e) / l;
+  const Vector3<T> eDdot = (cddot - dot(e, cddot) * e - (T(2.0) * lDot) * eDot - dot(eDot, cdot) * e) / l;
+  // L0 (omegadot x e1 + omega x (omega x e1)) in R_i's frame, turned to the world
+  Vector3<T> p[4] = {s.acceleration[0], s.acceleration[1], s.acceleration[0], s.acceleration[1]};
+  for (int i = 0; i < 2; ++i) {
+    const Vector3<T>&w = s.spin[i], &wdot = s.spinRate[i];
+    const Vector3<T> local{-(w.y * w.y + w.z * w.z), wdot.z + w.x * w.y, w.x * w.z - wdot.y};
+    p[2 + i] = s.R[i] * (L0 * local) - L0 * eDdot;
+  }
+  const T m = mass / T(420.0);
+  Vector3<T> F[4];
+  for (int r = 0; r < 4; ++r)
+    F[r] = m * (T(shape[r][0]) * p[0] + T(shape[r][1]) * p[1] + T(shape[r][2]) * p[2] + T(shape[r][3]) * p[3]);
+  const Vector3<T> G = F[2] + F[3];
+  const Vector3<T> k = (L0 / l) * (G - dot(e, G) * e);
+  out.force[0] = out.force[0] + F[0] + k;
+  out.force[1] = out.force[1] + F[1] - k;
+  for (int i = 0; i < 2; ++i) {
+    const Vector3<T> g = transposeTimes(s.R[i], F[2 + i]);  // e1 x g = (0, -g_z, g_y)
+    out.moment[i] = out.moment[i] + L0 * Vector3<T>{T(0.0), -g.z, g.y};
+  }
+}
 
 ConsistentInertia consistentInertia(const CorotationalBeam& beam, double mass, const NodePose& n1,
                                     const NodeVelocity& v1, const NodeAcceleration& a1, const NodePose& n2,

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "flex/consistent_mass.hpp"
+#include "flex/element_state.hpp"
 #include "math/lanes.hpp"
 
 namespace mfbd {
@@ -586,37 +587,13 @@ Vec12 nodeVelocities(const NodeVelocity& v1, const NodeVelocity& v2) {
   return v;
 }
 
-}  // namespace
-
-namespace {
-
-// The corotational element's internal force (internalForces' f) for one
-// element (T = double) or four at a time (T = Lanes), in the frames of the
-// nodes' copies of the element frame R_i = A_i C_i: what a node's C_i turns
-// is applied outside (ElementState, storeForce).
-template <class T>
-struct ElementState {
-  Matrix3<T> R[2];       // A_i C_i
-  Vector3<T> chord;      // r2 - r1
-  Vector3<T> chordRate;  // v2 - v1
-  Vector3<T> spin[2];    // C_i^T omega_i
-  // for the inertia (mass > 0)
-  Vector3<T> chordAcceleration;  // a2 - a1
-  Vector3<T> spinRate[2];        // C_i^T omegadot_i
-  Vector3<T> acceleration[2];    // a_i - g
-};
-
-template <class T>
-struct ElementForce {
-  Vector3<T> force[2];   // on node i (world)
-  Vector3<T> moment[2];  // on node i, in R_i's frame (C_i times it: the node frame)
-};
-
 Vector3<double> fromEigen(const Vec3& a) { return {a.x(), a.y(), a.z()}; }
 Vec3 toEigen(const Vector3<double>& a) { return Vec3(a.x, a.y, a.z); }
 Matrix3<double> fromEigen(const Mat3& M) {
   return {{fromEigen(Vec3(M.col(0))), fromEigen(Vec3(M.col(1))), fromEigen(Vec3(M.col(2)))}};
 }
+
+}  // namespace
 
 ElementState<double> elementState(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
                                   const NodeVelocity& v1, const NodeVelocity& v2) {
@@ -643,17 +620,14 @@ ElementState<double> elementState(const CorotationalBeam& beam, const NodePose& 
   return s;
 }
 
-// f = [force; C1 moment_1; -force; C2 moment_2].
+// f = [force_1; C1 moment_1; force_2; C2 moment_2].
 void storeForce(const CorotationalBeam& beam, const ElementForce<double>& out, Vec12& f) {
   const Vec3 m1 = toEigen(out.moment[0]), m2 = toEigen(out.moment[1]);
   f << toEigen(out.force[0]), beam.identityC1 ? m1 : Vec3(beam.C1 * m1), toEigen(out.force[1]),
       beam.identityC2 ? m2 : Vec3(beam.C2 * m2);
 }
 
-template <class T>
-Vector3<T> operator/(const Vector3<T>& a, const T& s) {
-  return {a.x / s, a.y / s, a.z / s};
-}
+namespace {
 
 // logSO3(Rr^T R), Rr = [e1 e2 e3]: for local rotations beyond the series,
 // lane by lane.
@@ -720,43 +694,6 @@ Vector3<T> inverseTangentTimes(const Vector3<T>& theta, const T& e, const Vector
   return (T(1.0) - e * squaredNorm(theta)) * y + (e * dot(theta, y)) * theta + (transposed ? -half : half);
 }
 
-// Consistent inertia less weight added to the element force: the f of
-// consistentInertiaForce (flex/consistent_mass.hpp, whose one-element form
-// the tests hold this one to) in the frames R_i, where the element axis
-// d_i = C_i e1 is e1: F = M_p (pddot - g_p) on [r1; r2; b1; b2],
-// f += [F_r1 + k; L0 e1 x (R_1^T F_b1); F_r2 - k; L0 e1 x (R_2^T F_b2)],
-// k = (L0 / l) P (F_b1 + F_b2).
-template <class T>
-void addInertiaForce(const ElementState<T>& s, const ElementConstants<T>& k, ElementForce<T>& out) {
-  using std::sqrt;  // and mfbd::sqrt(Lanes)
-  const auto& shape = kConsistentShape;
-  const T L0 = k.L0;
-  const T l = sqrt(squaredNorm(s.chord));
-  const Vector3<T> e = s.chord / l, &cdot = s.chordRate, &cddot = s.chordAcceleration;
-  const T lDot = dot(e, cdot);
-  const Vector3<T> eDot = (cdot - lDot * e) / l;
-  const Vector3<T> eDdot = (cddot - dot(e, cddot) * e - (T(2.0) * lDot) * eDot - dot(eDot, cdot) * e) / l;
-  // L0 (omegadot x e1 + omega x (omega x e1)) in R_i's frame, turned to the world
-  Vector3<T> p[4] = {s.acceleration[0], s.acceleration[1], s.acceleration[0], s.acceleration[1]};
-  for (int i = 0; i < 2; ++i) {
-    const Vector3<T>&w = s.spin[i], &wdot = s.spinRate[i];
-    const Vector3<T> local{-(w.y * w.y + w.z * w.z), wdot.z + w.x * w.y, w.x * w.z - wdot.y};
-    p[2 + i] = s.R[i] * (L0 * local) - L0 * eDdot;
-  }
-  const T m = k.mass / T(420.0);
-  Vector3<T> F[4];
-  for (int r = 0; r < 4; ++r)
-    F[r] = m * (T(shape[r][0]) * p[0] + T(shape[r][1]) * p[1] + T(shape[r][2]) * p[2] + T(shape[r][3]) * p[3]);
-  const Vector3<T> G = F[2] + F[3];
-  const Vector3<T> kk = (L0 / l) * (G - dot(e, G) * e);
-  out.force[0] = out.force[0] + F[0] + kk;
-  out.force[1] = out.force[1] + F[1] - kk;
-  for (int i = 0; i < 2; ++i) {
-    const Vector3<T> g = transposeTimes(s.R[i], F[2 + i]);  // e1 x g = (0, -g_z, g_y)
-    out.moment[i] = out.moment[i] + L0 * Vector3<T>{T(0.0), -g.z, g.y};
-  }
-}
-
 // The same f as internalForces (corotatedFrame, localForce,
 // strainMapTranspose), written for the residual's element loop: no
 // Kinematics workspace, no tangent-operator matrices, products with the
@@ -816,7 +753,7 @@ bool elementForce(const ElementState<T>& s, const ElementConstants<T>& k, Elemen
   out.force[1] = chord + fl[0] * e1;
   out.moment[0] = axial * twist0 + m0;
   out.moment[1] = axial * twist1 + m1;
-  if (!allZero(k.mass)) addInertiaForce(s, k, out);
+  if (!allZero(k.mass)) addInertiaForce(s, k.L0, k.mass, out);
   // A NaN or infinity anywhere (u, theta, the frame) reaches the force; so does its sum.
   const Vector3<T> sum = out.force[0] + out.force[1] + out.moment[0] + out.moment[1];
   return allFinite(sum.x + sum.y + sum.z);

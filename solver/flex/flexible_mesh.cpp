@@ -136,7 +136,7 @@ bool carriesMass(const FlexElement& e, const Vec3& gravity, bool withInertia) {
 namespace {
 
 // f += the element's consistent inertia less its weight, where it carries mass.
-void addInertiaForce(const FlexElement& e, const NodeState& s1, const NodeState& s2, const Vec3& gravity,
+void addElementInertia(const FlexElement& e, const NodeState& s1, const NodeState& s2, const Vec3& gravity,
                      bool withInertia, Vec12& f) {
   if (!carriesMass(e, gravity, withInertia)) return;
   if (withInertia) {
@@ -152,7 +152,7 @@ void addInertiaForce(const FlexElement& e, const NodeState& s1, const NodeState&
 bool elementForce(const FlexElement& e, const NodeState& s1, const NodeState& s2, const Vec3& gravity,
                   bool withInertia, Vec12& f) {
   if (!internalForceVector(e.beam, s1.pose, s2.pose, s1.velocity, s2.velocity, e.damping, f)) return false;
-  addInertiaForce(e, s1, s2, gravity, withInertia, f);
+  addElementInertia(e, s1, s2, gravity, withInertia, f);
   return true;
 }
 
@@ -183,7 +183,7 @@ bool flexibleResidual(const FlexibleMesh& mesh, const std::vector<NodeState>& no
     if (!elementForceVectors(lanes, inputs, gravity, f)) return false;
     for (int i = 0; i < lanes; ++i) {
       const FlexElement& e = mesh.elements[first + i];
-      if (!withInertia) addInertiaForce(e, nodes[e.node1], nodes[e.node2], gravity, withInertia, f[i]);
+      if (!withInertia) addElementInertia(e, nodes[e.node1], nodes[e.node2], gravity, withInertia, f[i]);
       scatter(mesh.nodes[e.node1], f[i].head<6>(), r);
       scatter(mesh.nodes[e.node2], f[i].tail<6>(), r);
     }

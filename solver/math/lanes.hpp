@@ -84,6 +84,10 @@ inline Vector3<T> operator*(const T& s, const Vector3<T>& a) {
   return {s * a.x, s * a.y, s * a.z};
 }
 template <class T>
+inline Vector3<T> operator/(const Vector3<T>& a, const T& s) {
+  return {a.x / s, a.y / s, a.z / s};
+}
+template <class T>
 inline T dot(const Vector3<T>& a, const Vector3<T>& b) {
   return a.x * b.x + a.y * b.y + a.z * b.z;
 }
