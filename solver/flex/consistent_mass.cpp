@@ -49,7 +49,8 @@ std::array<Block, 4> shapeTimes(double mass, const std::array<Block, 4>& p) {
   const double m = mass / 420.0;
   std::array<Block, 4> F;
   for (int k = 0; k < 4; ++k)
-    F[k] = m * (kConsistentShape[k][0] * p[0] + kConsistentShape[k][1] * p[1] + kConsistentShape[k][2] * p[2] + kConsistentShape[k][3] * p[3]);
+    F[k] = m * (kConsistentShape[k][0] * p[0] + kConsistentShape[k][1] * p[1] + kConsistentShape[k][2] * p[2] +
+                kConsistentShape[k][3] * p[3]);
   return F;
 }
 

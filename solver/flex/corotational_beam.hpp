@@ -18,6 +18,7 @@
 #pragma once
 #include "flex/beam_section.hpp"
 #include "flex/nodal_inertia.hpp"
+#include "math/lanes.hpp"
 
 namespace mfbd {
 
@@ -112,7 +113,7 @@ bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const
 // consistent inertia less weight (consistentInertiaForce, flex/
 // consistent_mass.hpp; the accelerations are read only then). False if any
 // element's frame is undefined or a force not finite.
-constexpr int kForceLanes = 4;
+constexpr int kForceLanes = Lanes::kCount;
 struct ElementInputs {
   const CorotationalBeam* beam;
   double damping, mass;
