@@ -4,9 +4,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 #include <vector>
 
+#include "scene/number_text.hpp"
 #include "scene/time_function.hpp"
 
 using namespace mfbd;
@@ -113,4 +115,12 @@ TEST(TimeFunction, BadTablesAreRejected) {
   EXPECT_THROW(TimeFunction::table({0.0, 2.0, 1.0}, {0.0, 1.0, 2.0}), std::invalid_argument);
   EXPECT_THROW(TimeFunction::table({0.0, 1.0}, {0.0, NAN}), std::invalid_argument);
   EXPECT_THROW(TimeFunction::table({0.0, 1.0}, {0.0}), std::invalid_argument);
+}
+
+TEST(NumberText, ShortestRoundTripNotFixedPoint) {
+  EXPECT_EQ(numberText(1e-300), "1e-300");
+  EXPECT_EQ(numberText(1e300), "1e+300");
+  EXPECT_EQ(numberText(0.1), "0.1");
+  EXPECT_EQ(numberText(-2.5), "-2.5");
+  for (double x : {1e-320, 3.0000000000000004, 6.02214076e23}) EXPECT_EQ(std::strtod(numberText(x).c_str(), nullptr), x);
 }
