@@ -15,7 +15,9 @@ LIGHT = np.array([0.3, 0.4, 0.87]) / np.linalg.norm([0.3, 0.4, 0.87])
 
 
 def _bounds(drawing, frames):
-    pts = np.vstack([drawing.frame(k)[0] for k in frames])
+    """A cube around the world origin and the drawing at up to 24 of the frames."""
+    frames = np.asarray(frames)[np.unique(np.linspace(0, len(frames) - 1, min(24, len(frames))).astype(int))]
+    pts = np.vstack([np.zeros((1, 3))] + [drawing.frame(k)[0] for k in frames])
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     centre, half = (lo + hi) / 2, max((hi - lo).max() / 2, 1e-9) * 1.05
     return centre - half, centre + half
@@ -33,12 +35,11 @@ def _view(drawing, frames, figsize=(6.4, 5.2)):
     fig = plt.figure(figsize=figsize, layout="constrained")
     ax = fig.add_subplot(projection="3d")
     lo, hi = _bounds(drawing, frames)
-    z_up = drawing.result.model  # title only; the view looks down the world z axis slightly tilted
     ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x [m]", ylabel="y [m]",
            zlabel="z [m]")
     ax.set_box_aspect((1, 1, 1))
-    ax.view_init(elev=25, azim=-70)
-    ax.set_title(z_up, fontsize=9)
+    ax.view_init(elev=20, azim=-60, vertical_axis=drawing.up)
+    ax.set_title(drawing.result.model, fontsize=9)
     return fig, ax
 
 
@@ -58,7 +59,7 @@ def _draw(ax, drawing, k, collection=None):
 def render_png(drawing, path, k=-1):
     """One frame (default the last) as a PNG."""
     k = k % len(drawing.result.time)
-    fig, ax = _view(drawing, [k])
+    fig, ax = _view(drawing, range(len(drawing.result.time)))
     _draw(ax, drawing, k)
     ax.text2D(0.02, 0.02, f"t = {drawing.result.time[k]:.4g} s", transform=ax.transAxes)
     fig.savefig(path, dpi=110)

@@ -105,6 +105,8 @@ class Drawing:
         scene, meshes = read_scene(fmu)
         params = parameter_values(scene, result.parameters)
         self.result = result
+        gravity = [evaluate(g, params, f"gravity[{i}]") for i, g in enumerate(scene.get("gravity", [0, 0, 0]))]
+        self.up = "xyz"[int(np.argmax(np.abs(gravity)))] if np.any(gravity) else "z"  # drawn upwards
         v = result.values
         positions = [np.array([v[f"{b}.position.{c}"][0] for c in "xyz"]) for b in body_names(scene)
                      if f"{b}.position.x" in v]
