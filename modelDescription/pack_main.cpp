@@ -41,7 +41,7 @@ std::string readFile(const fs::path& p) {
 // file), as resources/visual/<file name>, where the drawing tools look.
 std::vector<mfbd::ZipEntry> visualMeshFiles(const std::string& sceneText, const fs::path& sceneDir) {
   const auto doc = nlohmann::json::parse(sceneText);
-  std::map<std::string, std::string> files;  // file name -> path in the scene
+  std::map<std::string, std::pair<std::string, std::string>> files;  // file name -> (path in the scene, JSON path)
   if (!doc.contains("bodies")) return {};
   for (std::size_t i = 0; i < doc["bodies"].size(); ++i) {
     const auto& body = doc["bodies"][i];
@@ -56,17 +56,18 @@ std::vector<mfbd::ZipEntry> visualMeshFiles(const std::string& sceneText, const 
       const std::string file = items[k]["file"];
       const std::string name = fs::path(file).filename().string();
       const auto known = files.find(name);
-      if (known != files.end() && known->second != file)
-        throw std::runtime_error(where + ": '" + file + "' has the file name of '" + known->second +
+      if (known != files.end() && known->second.first != file)
+        throw std::runtime_error(where + ": '" + file + "' has the file name of '" + known->second.first +
                                  "'; mesh files need different names");
-      files[name] = file;
+      files[name] = {file, where};
     }
   }
   std::vector<mfbd::ZipEntry> entries;
-  for (const auto& [name, file] : files) {
+  for (const auto& [name, source] : files) {
+    const auto& [file, where] = source;
     const fs::path path = fs::path(file).is_absolute() ? fs::path(file) : sceneDir / file;
     if (!fs::is_regular_file(path))
-      throw std::runtime_error("visual mesh file '" + file + "' not found (looked at " + path.string() + ")");
+      throw std::runtime_error(where + ": mesh file '" + file + "' not found (looked at " + path.string() + ")");
     entries.push_back({"resources/visual/" + name, readFile(path)});
   }
   return entries;

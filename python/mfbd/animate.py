@@ -32,7 +32,8 @@ def _shade(points, triangles, colors):
 
 
 def _view(drawing, frames, figsize=(6.4, 5.2)):
-    fig = plt.figure(figsize=figsize, layout="constrained")
+    fig = plt.figure(figsize=figsize)  # a fixed layout: constrained layout would redraw every frame thrice
+    fig.subplots_adjust(left=0.02, right=0.95, bottom=0.05, top=0.95)
     ax = fig.add_subplot(projection="3d")
     lo, hi = _bounds(drawing, frames)
     ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x [m]", ylabel="y [m]",

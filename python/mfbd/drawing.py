@@ -26,7 +26,7 @@ class Part:
     flex: str = ""              # owner flexible body (beam segments)
     nodes: tuple = ()           # the segment's end nodes
     frames: tuple = ()          # section frame at each end relative to the node frame
-    element: int = -1           # element whose section forces colour the segment (-1: none)
+    elements: tuple = ()        # elements the segment spans: the first exposed one gives its section forces
 
 
 def body_names(scene):
@@ -84,9 +84,9 @@ def beam_parts(flex, path, params, exposed, default_size):
         y_hint = vector(flex["section_y"], params, path + ".section_y")
     if "beam" in flex:
         line = sorted(exposed)
-        pairs = [(a, b, a if b == a + 1 else -1) for a, b in zip(line[:-1], line[1:])]
+        pairs = [(a, b, tuple(range(a, b))) for a, b in zip(line[:-1], line[1:])]
     else:
-        pairs = [(a, b, e) for e, (a, b) in enumerate(elements) if a in exposed and b in exposed]
+        pairs = [(a, b, (e,)) for e, (a, b) in enumerate(elements) if a in exposed and b in exposed]
     parts = []
     m = len(outline)
     ring = np.column_stack([np.zeros(m), outline])  # section points in the section frame
@@ -94,7 +94,7 @@ def beam_parts(flex, path, params, exposed, default_size):
     for a, b, e in pairs:
         F0 = frames[a] if "beam" in flex else section_frame(nodes[a], nodes[b], y_hint)
         parts.append(Part(f"{flex['name']}[{a}-{b}]", np.vstack([ring, ring]), np.array(tube), col,
-                          flex=flex["name"], nodes=(a, b), frames=(frames[a].T @ F0, frames[b].T @ F0), element=e))
+                          flex=flex["name"], nodes=(a, b), frames=(frames[a].T @ F0, frames[b].T @ F0), elements=e))
     return parts
 
 
@@ -191,8 +191,9 @@ class Drawing:
         nan3 = [np.nan] * 3
         energy = v.get(f"{part.flex}.strain_energy") if part.flex else None
         energy = float(energy[k]) if energy is not None else np.nan
-        if part.element < 0:
+        exposed = [e for e in part.elements if f"{part.flex}.element{e}.end1.force.x" in v]
+        if not exposed:
             return nan3, nan3, energy
-        stem = f"{part.flex}.element{part.element}.end1"
+        stem = f"{part.flex}.element{exposed[0]}.end1"
         pick = lambda q: [float(v[f"{stem}.{q}.{c}"][k]) for c in "xyz"] if f"{stem}.{q}.x" in v else nan3
         return pick("force"), pick("moment"), energy

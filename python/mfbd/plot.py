@@ -83,8 +83,15 @@ def default_selection(names):
 
 
 def plot(result, path, names=None, title=None):
-    """One figure of the selected outputs over time, written to path; at
-    most MAX_PANELS panels (the figure says how many were left out)."""
+    """One figure of the selected outputs over time, written to path."""
+    fig = figure(result, names, title)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def figure(result, names=None, title=None):
+    """The figure of plot(): at most MAX_PANELS panels (it says how many
+    outputs were left out)."""
     names = list(names or result.values)
     groups = panels(result, names)
     left_out = sum(len(g[2]) for g in groups[MAX_PANELS:])
@@ -108,8 +115,7 @@ def plot(result, path, names=None, title=None):
     if left_out:
         heading += f"\n{left_out} more outputs not plotted (select them with --output)"
     fig.suptitle(heading, fontsize=9, color="red" if result.truncated else "black")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    return fig
 
 
 def _legend(ax, count):
