@@ -13,6 +13,7 @@ import os
 import pathlib
 import sys
 import tempfile
+import time
 
 import numpy as np
 
@@ -70,10 +71,12 @@ def one_run(data, digest, parameters, outputs, stop_time, step, metrics):
     """One task: one FMU instance, one run; a row of the table."""
     fmu = local_fmu(data, digest)
     row = dict(parameters)
+    start = time.perf_counter()
     try:
         result = runner.simulate(fmu, parameters, outputs, stop_time, step, progress=False)
     except (ValueError, RuntimeError) as e:
         return {**row, "truncated": True, "error": str(e)}
+    row["wall_time_s"] = time.perf_counter() - start
     for name, y in result.values.items():
         row[f"peak:{name}"] = float(np.max(np.abs(y)))
         row[f"final:{name}"] = float(y[-1])
@@ -95,7 +98,7 @@ def run_sweep(fmu, points, outputs=None, stop_time=None, step=None, metrics=None
     cluster = None
     if scheduler is None:
         cluster = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1, processes=True,
-                               dashboard_address=None)
+                               dashboard_address=":0")  # any free port
     client = Client(scheduler or cluster)
     try:
         shared = client.scatter(data, broadcast=True)
