@@ -96,7 +96,7 @@ def _write_tables(args, result, selected):
         print(f"simulate: wrote {(args.out / f'{name}.parquet').resolve()}")
     if not args.no_plot:
         from .plot import default_selection
-        plot(chosen, args.out / f"{name}.png", None if args.output else default_selection(selected) or selected)
+        plot(chosen, args.out / f"{name}.png", None if args.output else default_selection(chosen, selected))
         print(f"simulate: wrote {(args.out / f'{name}.png').resolve()}")
 
 

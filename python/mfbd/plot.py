@@ -13,14 +13,18 @@ import numpy as np  # noqa: E402
 LEGEND_ENTRIES = 6     # more curves are summarised in one legend line
 VISIBLE_SHARE = 0.05   # a curve's swing must fill this share of its panel's range
 MAX_PANELS = 10
-DEFAULT_QUANTITIES = {"angle", "angle1", "angle2", "position", "x", "y", "z", "rotation", "kinetic_energy",
-                      "strain_energy", "potential_energy"}
+DEFAULT_QUANTITIES = {"joint coordinate", "position", "kinetic_energy", "strain_energy", "potential_energy"}
+NAMED_QUANTITIES = {"kinetic_energy", "strain_energy", "potential_energy", "drive_torque", "drive_force", "drive_rate",
+                    "torque", "force", "damping"}
 NOISE = 1e-9           # swings below this share of the largest value are round-off
 
 
 def quantity(name):
-    """'rod.node4.position.x' -> ('position', 'x'); 'hinge.angle' -> ('angle', '')."""
+    """'rod.node4.position.x' -> ('position', 'x'); 'hinge.angle' -> ('joint coordinate', 'angle');
+    'hinge.angle_rate' -> ('joint rate', 'angle_rate')."""
     parts = name.split(".")
+    if len(parts) == 2 and parts[1] not in NAMED_QUANTITIES:
+        return ("joint rate" if parts[1].endswith("_rate") else "joint coordinate"), parts[1]
     parts = [p for p in parts[1:] if not re.fullmatch(r"(node|element)\d+|end[12]", p)] or parts[-1:]
     if len(parts) > 1 and parts[-1] in {"x", "y", "z", "w"}:
         return ".".join(parts[:-1]), parts[-1]
@@ -76,10 +80,18 @@ def title_text(result):
     return textwrap.fill(textwrap.shorten(text, 300, placeholder=" ..."), 110)
 
 
-def default_selection(names):
-    """Without a selection: joint coordinates, positions and energies (the
-    CSV has every output)."""
-    return [n for n in names if quantity(n)[0] in DEFAULT_QUANTITIES]
+def default_selection(result, names):
+    """Without a selection: the joint coordinates, positions and energies
+    that move (the CSV has every output); rates where too few move."""
+    moving = [n for n in names if not _constant(result.values[n])]
+    chosen = [n for n in moving if quantity(n)[0] in DEFAULT_QUANTITIES]
+    if len(chosen) < 2:
+        chosen += [n for n in moving if quantity(n)[0] in ("joint rate", "angular_velocity")]
+    return chosen or names
+
+
+def _constant(y):
+    return len(y) == 0 or np.ptp(y) <= NOISE * max(1.0, float(np.max(np.abs(y))))
 
 
 def plot(result, path, names=None, title=None):
@@ -103,7 +115,9 @@ def figure(result, names=None, title=None):
     for ax, (q, unit, members) in zip(axes[:, 0], groups):
         for n in members:
             ax.plot(result.time, result.values[n], lw=1, label=curve_label(n, q))
-        ax.set_ylabel(textwrap.fill(f"{q.replace('_', ' ')} {unit_text(unit)}", 24), fontsize=9)
+        coordinates = {quantity(n)[1] for n in members}
+        shown = coordinates.pop() if q.startswith("joint") and len(coordinates) == 1 else q
+        ax.set_ylabel(textwrap.fill(f"{shown.replace('_', ' ')} {unit_text(unit)}", 24), fontsize=9)
         ax.grid(True, alpha=0.3)
         _legend(ax, len(members))
         if result.truncated:

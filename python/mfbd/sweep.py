@@ -76,7 +76,7 @@ def one_run(data, digest, parameters, outputs, stop_time, step, metrics):
         result = runner.simulate(fmu, parameters, outputs, stop_time, step, progress=False)
     except (ValueError, RuntimeError) as e:
         return {**row, "truncated": True, "error": str(e)}
-    row["wall_time_s"] = time.perf_counter() - start
+    wall = time.perf_counter() - start
     for name, y in result.values.items():
         row[f"peak:{name}"] = float(np.max(np.abs(y)))
         row[f"final:{name}"] = float(y[-1])
@@ -84,6 +84,7 @@ def one_run(data, digest, parameters, outputs, stop_time, step, metrics):
         row[label] = float(metric(result))
     row["truncated"] = result.truncated
     row["error"] = result.message
+    row["wall_time_s"] = wall
     return row
 
 
