@@ -51,14 +51,16 @@ def main(argv=None):
 
 
 def simulate_command(args):
-    from .drawing import required_outputs
+    from .drawing import check_visuals, required_outputs
     from .scene import read_scene
     drawing_wanted = args.vtk or args.render or args.animation
     outputs = list(args.output)
+    parameters = runner.parse_assignments(args.param)
     extra = []
-    if drawing_wanted and outputs:
-        extra = required_outputs(read_scene(args.fmu)[0])
-    result = runner.simulate(args.fmu, runner.parse_assignments(args.param), _with_drawing_outputs(args.fmu, outputs, extra),
+    if drawing_wanted:
+        check_visuals(args.fmu, parameters)
+        extra = required_outputs(read_scene(args.fmu)[0]) if outputs else []
+    result = runner.simulate(args.fmu, parameters, _with_drawing_outputs(args.fmu, outputs, extra),
                              args.stop_time, args.step, args.tolerance, progress=not args.quiet,
                              verbose=args.verbose)
     selected = runner.select(list(result.values), outputs) if outputs else list(result.values)

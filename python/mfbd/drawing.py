@@ -98,6 +98,18 @@ def beam_parts(flex, path, params, exposed, default_size):
     return parts
 
 
+def check_visuals(fmu, parameters=None):
+    """Every body's visual made into a surface once: a bad entry fails
+    before the run, naming its JSON path."""
+    scene, meshes = read_scene(fmu)
+    params = parameter_values(scene, parameters)
+    for i, b in enumerate(scene.get("bodies") or []):
+        for item, where in visual_list(b, f"bodies[{i}]"):
+            shape_surface(item, where, params, meshes)
+    for i, f in enumerate(scene.get("flexible_bodies") or []):
+        beam_parts(f, f"flexible_bodies[{i}]", params, set(), 1.0)
+
+
 class Drawing:
     """Surfaces of a scene, posed from a Result that holds the outputs of required_outputs()."""
 

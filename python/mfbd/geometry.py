@@ -1,6 +1,5 @@
 """Surfaces (points, triangles) of the visual shapes in their owner's frame,
 and of a beam's section outline."""
-import io
 import pathlib
 import tempfile
 

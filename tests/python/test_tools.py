@@ -1,22 +1,20 @@
 """The user's Python tools (python/mfbd): simulate CLI (progress, parameters,
 output selection, discard), plots, visual keys, ParaView files read back,
 pictures, and a Dask sweep against direct runs."""
-import json
 import subprocess
 import sys
 import zipfile
 
 import numpy as np
-import pytest
 
 from conftest import EXAMPLES, FMUS, ROOT, load_scene, pack, packed
 
 sys.path.insert(0, str(ROOT / "python"))
 from mfbd import run as runner  # noqa: E402
-from mfbd.drawing import Drawing, required_outputs  # noqa: E402
+from mfbd.drawing import Drawing  # noqa: E402
 from mfbd.paraview import read_series, write_series  # noqa: E402
 from mfbd.plot import figure, panels  # noqa: E402
-from mfbd.scene import quaternion_matrix, read_scene  # noqa: E402
+from mfbd.scene import quaternion_matrix  # noqa: E402
 from mfbd.table import read_csv  # noqa: E402
 
 SIMULATE = [sys.executable, str(EXAMPLES / "simulate.py")]
@@ -100,9 +98,8 @@ def test_small_motions_get_their_own_panel_and_legends_stay_outside():
     assert angle.get_legend().get_texts()[-1].get_text() == "... and 7 more (CSV)"
 
 
-def run_for_drawing(fmu, stop_time, **kw):
-    scene, _ = read_scene(fmu)
-    return runner.simulate(fmu, outputs=None, stop_time=stop_time, progress=False, **kw)
+def run_for_drawing(fmu, stop_time):
+    return runner.simulate(fmu, outputs=None, stop_time=stop_time, progress=False)
 
 
 def part_points(mesh, part):
@@ -151,6 +148,11 @@ def test_visual_keys_are_ignored_by_the_physics_and_checked(tmp_path):
     plain["bodies"][0]["visual"] = 3
     r = pack(plain, tmp_path, "bad")
     assert r.returncode == 1 and "bodies[0].visual: expected an object" in r.stderr
+    plain["bodies"][0]["visual"] = [{"shape": "sphere", "radius": "0.1*length"}, {"shape": "capsule", "radius": 0.1}]
+    r = simulate(packed(plain, tmp_path, "bad_shape"), "--out", tmp_path, "-q", "--render", tmp_path / "x.png")
+    assert r.returncode == 1
+    assert "bodies[0].visual[1]: a capsule takes length, radius" in r.stderr and "missing ['length']" in r.stderr
+    assert "output points" not in r.stdout  # refused before the run
 
 
 def tetrahedron(path):
