@@ -15,12 +15,13 @@ LIGHT = np.array([0.3, 0.4, 0.87]) / np.linalg.norm([0.3, 0.4, 0.87])
 
 
 def _bounds(drawing, frames):
-    """A cube around the world origin and the drawing at up to 24 of the frames."""
+    """A cube around the world origin and the drawing at up to 24 of the
+    frames, and the drawing's own extent along each axis."""
     frames = np.asarray(frames)[np.unique(np.linspace(0, len(frames) - 1, min(24, len(frames))).astype(int))]
     pts = np.vstack([np.zeros((1, 3))] + [drawing.frame(k)[0] for k in frames])
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     centre, half = (lo + hi) / 2, max((hi - lo).max() / 2, 1e-9) * 1.05
-    return centre - half, centre + half
+    return centre - half, centre + half, hi - lo
 
 
 def _shade(points, triangles, colors):
@@ -35,13 +36,28 @@ def _view(drawing, frames, figsize=(6.4, 5.2)):
     fig = plt.figure(figsize=figsize)  # a fixed layout: constrained layout would redraw every frame thrice
     fig.subplots_adjust(left=0.02, right=0.95, bottom=0.05, top=0.95)
     ax = fig.add_subplot(projection="3d")
-    lo, hi = _bounds(drawing, frames)
+    lo, hi, extent = _bounds(drawing, frames)
     ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x [m]", ylabel="y [m]",
            zlabel="z [m]")
     ax.set_box_aspect((1, 1, 1))
-    ax.view_init(elev=20, azim=-60, vertical_axis=drawing.up)
+    ax.view_init(*_camera(drawing.up, extent), vertical_axis=drawing.up)
     ax.set_title(drawing.result.model, fontsize=9)
     return fig, ax
+
+
+# Azimuth that looks along a world axis, for each vertical axis.
+LOOK_ALONG = {("y", "z"): 0, ("y", "x"): 90, ("z", "y"): -90, ("z", "x"): 0, ("x", "y"): 0, ("x", "z"): 90}
+
+
+def _camera(up, extent):
+    """(elevation, azimuth): a planar motion is seen nearly face on (from
+    above when its plane is across "up"), anything else obliquely."""
+    thin = int(np.argmin(extent))
+    if extent[thin] >= 0.1 * extent.max():
+        return 20, -60
+    if "xyz"[thin] == up:
+        return 65, -60
+    return 15, LOOK_ALONG[(up, "xyz"[thin])] - 25
 
 
 def _draw(ax, drawing, k, collection=None):

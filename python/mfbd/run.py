@@ -202,8 +202,10 @@ def _progress(total, enabled):
     if not enabled:
         return None
     from tqdm import tqdm
-    return tqdm(total=total, file=sys.stderr, unit="s", dynamic_ncols=True, mininterval=0.5,
-                bar_format="t = {n:.4g}/{total:.4g} s |{bar}| {postfix}, elapsed {elapsed}, ETA {remaining}")
+    bar = tqdm(total=total, file=sys.stderr, unit="s", dynamic_ncols=True, mininterval=0.5,
+               bar_format="t = {n:.4g}/{total:.4g} s |{bar}| {postfix}, elapsed {elapsed}, ETA {remaining}")
+    bar.set_postfix_str("real-time factor ?", refresh=False)
+    return bar
 
 
 def _advance(bar, simulated):
