@@ -206,3 +206,18 @@ def test_dask_sweep_matches_direct_runs(tmp_path):
     assert rows[0]["peak"] > rows[2]["peak"]  # the stiffer rod bends less
     sweep.write_table(rows, tmp_path / "s.csv")
     assert (tmp_path / "s.csv").read_text().splitlines()[0].startswith("E,rod.damping,peak:")
+
+
+def test_sweep_command_reports_discarded_runs(tmp_path):
+    scene = load_scene("pendulum")
+    scene["solver"] = {"h_max": 1e-2, "h_min": 1e-2, "max_iterations": 1}  # Newton cannot converge
+    fmu = packed(scene, tmp_path, "discarding")
+    r = subprocess.run([sys.executable, str(EXAMPLES / "sweep.py"), str(fmu), "--random", "angle0=0:1", "--samples",
+                        "2", "--seed", "3", "--output", "hinge.angle", "--stop-time", "0.1", "--workers", "1",
+                        "--out", str(tmp_path / "sweep"), "-q"], capture_output=True, text=True)
+    assert r.returncode == 3, r.stderr
+    assert "2 runs, 2 discarded" in r.stdout
+    rows = (tmp_path / "sweep" / "sweep.csv").read_text().splitlines()
+    assert len(rows) == 3 and all(",True,fmi2Discard at t = 0 s" in row for row in rows[1:])
+    expected = np.random.default_rng(3).uniform(0, 1, 2)
+    assert [float(row.split(",")[0]) for row in rows[1:]] == list(expected)
