@@ -71,7 +71,7 @@ def plot(rows, path):
         ax.set_title(f"pendulum chain of {chain}, released from horizontal, h = 1e-3", fontsize=9)
         ax.set_xlabel("bodies n")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13))  # below: no data hidden
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))  # below: no data hidden
     axes[0].set_ylabel("wall time [µs]")
     fig.tight_layout()
     fig.savefig(path, dpi=120, bbox_inches="tight")

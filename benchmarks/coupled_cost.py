@@ -76,7 +76,7 @@ def plot(rows, path):
     ax.set_title("Beam with rigid bodies attached: CPU time per substep (dashed: proportional to N;\n"
                  "labels: µs per element-step, first and last series)", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13))  # below: no data hidden
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16))  # below: no data hidden
     fig.tight_layout()
     fig.savefig(path, dpi=120, bbox_inches="tight")
     print(f"wrote {path}")

@@ -335,7 +335,7 @@ def plot_precision_work(ax, rows, error_key="error", annotate="h_or_elements", f
 
 def legend_below(ax):
     """The legend under the axes (outside the data), one entry a line."""
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), borderaxespad=0.0)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), borderaxespad=0.0)
 
 
 def refinement_grid(pairs, meshes=2):
@@ -384,6 +384,13 @@ def save_figure(fig, path):
     fig.tight_layout()
     fig.savefig(path, dpi=110, bbox_inches="tight")  # legends sit outside the axes
     print(f"wrote {pathlib.Path(path).resolve()}")
+
+
+def extrapolated_reference(path, column="tip_deflection_7s_m"):
+    """Our Richardson-extrapolated value from a study's reference CSV (to
+    redraw its figure)."""
+    row = next(r for r in read_csv(path) if r["code"] == OURS and r["h_or_elements"] == "extrapolated")
+    return float(row[column])
 
 
 def cheapest_at(rows, level, error_key="error"):
