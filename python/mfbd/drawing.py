@@ -146,6 +146,10 @@ class Drawing:
                 self.missing.append(f["name"])
                 continue
             self.parts += beam_parts(f, f"flexible_bodies[{i}]", params, exposed, self.default_size / 2)
+        if not self.parts:
+            raise ValueError(f"nothing to draw: {', '.join(self.missing) or 'the scene'} expose no pose; list the "
+                             "bodies in the scene's \"outputs\" and two or more nodes of a flexible body in its "
+                             "\"outputs\" (\"nodes\": \"all\" for its deflected shape)")
 
     def _pose(self, owner, k):
         v = self.result.values

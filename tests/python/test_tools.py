@@ -155,6 +155,13 @@ def test_visual_keys_are_ignored_by_the_physics_and_checked(tmp_path):
     assert "output points" not in r.stdout  # refused before the run
 
 
+def test_a_scene_without_exposed_poses_is_refused_by_name(tmp_path):
+    r = simulate(FMUS / "cantilever_vibration.fmu", "--out", tmp_path, "-q", "--stop-time", "0.1",
+                 "--vtk", tmp_path / "vtk")
+    assert r.returncode == 1
+    assert "nothing to draw: beam expose no pose" in r.stderr and '"nodes": "all"' in r.stderr
+
+
 def tetrahedron(path):
     path.write_text("v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
 
