@@ -167,21 +167,21 @@ def simulate(fmu, parameters=None, outputs=None, stop_time=None, step=None, tole
         params["solver.tolerance"] = tolerance
     log = []
     master = Master(fmu, params, verbose=verbose, log=log, start_time=t0, stop_time=t_end)
-    n = int(round((t_end - t0) / h))
+    n = max(1, int(np.ceil((t_end - t0) / h * (1 - 1e-12))))  # the last step ends at t_end
     times, rows = [t0], [master.get(chosen)]
     truncated, message = False, ""
     bar = _progress(t_end - t0, enabled=progress)
     try:
         for k in range(n):
             t = t0 + k * h
-            if not master.step(t, t0 + (k + 1) * h - t):
+            if not master.step(t, min(t0 + (k + 1) * h, t_end) - t):
                 truncated = True
                 last = master.last_successful_time()
                 reasons = [m for s, _, m in log if s in ("discard", "error")]
                 message = (f"fmi2Discard at t = {t:g} s (last successful time {last:g} s): "
                            + (reasons[-1] if reasons else "no message from the FMU"))
                 break
-            times.append(t0 + (k + 1) * h)
+            times.append(min(t0 + (k + 1) * h, t_end))
             rows.append(master.get(chosen))
             if bar:
                 _advance(bar, times[-1] - t0)

@@ -228,3 +228,9 @@ def test_sweep_command_reports_discarded_runs(tmp_path):
     assert len(rows) == 3 and all(",True,fmi2Discard at t = 0 s" in row for row in rows[1:])
     expected = np.random.default_rng(3).uniform(0, 1, 2)
     assert [float(row.split(",")[0]) for row in rows[1:]] == list(expected)
+
+
+def test_the_last_step_ends_at_the_stop_time():
+    r = runner.simulate(FMUS / "pendulum.fmu", outputs=["hinge.angle"], stop_time=1.0, step=0.3, progress=False)
+    np.testing.assert_allclose(r.time, [0, 0.3, 0.6, 0.9, 1.0], atol=1e-15)
+    assert r.time[-1] == 1.0
