@@ -80,14 +80,14 @@ def plot(rows, path, tolerance):
     ax.loglog(n, step, "o-", label="measured")
     # Linear reference: proportional to N, through the geometric mean of the points.
     c = np.exp(np.mean(np.log(step / n)))
-    ax.loglog(n, c * n, "k--", lw=1, label=f"linear: {c:.2f} us x N")
-    ax.loglog(n, TARGET_US_PER_ELEMENT_STEP * n, ":", color="tab:green", label="target: 0.5 us x N")
+    ax.loglog(n, c * n, "k--", lw=1, label=f"linear: {c:.2f} µs × N")
+    ax.loglog(n, TARGET_US_PER_ELEMENT_STEP * n, ":", color="tab:green", label="target: 0.5 µs × N")
     for x, y, r in zip(n, step, rows):
         ax.annotate(f"{float(r['us_per_element_step']):.2f}", (x, y), textcoords="offset points", xytext=(4, -12),
                     fontsize=8)
     ax.set_xlabel("elements N")
-    ax.set_ylabel("wall time per substep [us]")
-    ax.set_title(f"Flexible cantilever, modified Newton to {tolerance:g} (labels: us per element-step)", fontsize=9)
+    ax.set_ylabel("wall time per substep [µs]")
+    ax.set_title(f"Flexible cantilever, modified Newton to {tolerance:g} (labels: µs per element-step)", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     fig.tight_layout()
@@ -112,6 +112,7 @@ def cost_arguments(doc, min_time, extra=()):
         p.add_argument(*flags, **options)
     p.add_argument("--build", type=pathlib.Path, default=ROOT / "build")
     p.add_argument("--out", type=pathlib.Path, default=ROOT / "benchmarks" / "results")
+    p.add_argument("--replot", action="store_true", help="redraw the figure from the study's CSV in --out (no runs)")
     args = p.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     return args
@@ -119,6 +120,10 @@ def cost_arguments(doc, min_time, extra=()):
 
 def main():
     args = cost_arguments(__doc__, min_time=1.0)
+    if args.replot:
+        with open(args.out / "flexible_cost.csv", newline="") as f:
+            rows = list(csv.DictReader(f))
+        return plot(rows, args.out / "flexible_cost.png", float(rows[0].get("newton_tolerance", args.tolerance)))
 
     rows = run(compile_benchmark(args.build, "flexible_cost"), args,
                ["--min-time", str(args.min_time), "--tolerance", str(args.tolerance)])

@@ -33,7 +33,7 @@ import time
 import numpy as np
 
 from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
-    save_figure, study_arguments
+    legend_below, read_csv, save_figure, study_arguments
 
 G, MASS, L = 9.81, 1.0, 1.0  # each bar
 H, STOP, COMMUNICATION, RHO_INF = 1e-3, 0.2, 0.01, 0.8
@@ -113,15 +113,20 @@ def plot(rows, path, slopes):
     for p, ls in ((1, "--"), (2, ":")):
         ax.loglog(n, ours_cost[-1] * (n / n[-1])**p, "k" + ls, lw=0.8, label=f"~n^{p}")
     ax.set_xlabel("bodies n")
-    ax.set_ylabel("wall time per substep [us]")
+    ax.set_ylabel("wall time per substep [µs]")
     ax.set_title(f"n-body pendulum chain, h = {H:g}, communication step {COMMUNICATION:g} s", fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    legend_below(ax)
     save_figure(fig, path)
 
 
 def main():
     args = study_arguments(__doc__, repeats=3, extra=[("--sizes", dict(type=int, nargs="+", default=SIZES))])
+    if args.replot:
+        rows = [{**r, "n": float(r["n"]), "us_per_step": float(r["us_per_step"])}
+                for r in read_csv(args.out / "peer_chain_cost.csv")]
+        slopes = {r["code"]: float(r["fitted_exponent_n_ge_20"]) for r in rows}
+        return plot(rows, args.out / "peer_chain_cost.png", slopes)
 
     factory = SceneFactory()
     rows = []

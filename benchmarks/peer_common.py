@@ -254,6 +254,8 @@ def study_arguments(doc, repeats, fmu=None, extra=()):
     if fmu is not None:
         parser.add_argument("--fmu", type=pathlib.Path, default=fmu)
     parser.add_argument("--repeats", type=int, default=repeats)
+    parser.add_argument("--replot", action="store_true",
+                        help="redraw the figure from the study's CSV in --out (no runs)")
     for flag, kwargs in extra:
         parser.add_argument(flag, **kwargs)
     args = parser.parse_args()
@@ -305,9 +307,10 @@ def pareto_front(points):
 
 def plot_precision_work(ax, rows, error_key="error", annotate="h_or_elements", floor=1e-16):
     """Log-log error against wall time, one series per code and model: every
-    run a marker labelled with `annotate` (a column, or a function of the
-    row), a line through the series' Pareto front (open markers: runs a
-    cheaper run of the same series beats)."""
+    run a marker, a line through the series' Pareto front labelled with
+    `annotate` (a column, or a function of the row; open unlabelled markers:
+    runs a cheaper run of the same series beats, their settings in the
+    CSV), the legend below the axes where it hides no point."""
     palette = {OURS: [("C0", "o"), ("C9", "v")], EXUDYN: [("C3", "s"), ("C2", "^"), ("C1", "D")]}
     labels = list(dict.fromkeys(series_label(r) for r in rows))
     for label in labels:
@@ -323,11 +326,16 @@ def plot_precision_work(ax, rows, error_key="error", annotate="h_or_elements", f
         ax.loglog(x[front], y[front], "-", marker=marker, color=color, label=label)
         beaten = [i for i in range(len(sel)) if i not in front]
         ax.loglog(x[beaten], y[beaten], linestyle="none", marker=marker, color=color, mfc="none", alpha=0.6)
-        for xi, yi, r in zip(x, y, sel):
-            text = annotate(r) if callable(annotate) else _short(r[annotate])
-            ax.annotate(text, (xi, yi), textcoords="offset points", xytext=(4, 3), fontsize=6, color=color)
+        for i in front:
+            text = annotate(sel[i]) if callable(annotate) else _short(sel[i][annotate])
+            ax.annotate(text, (x[i], y[i]), textcoords="offset points", xytext=(4, 3), fontsize=6, color=color)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    legend_below(ax)
+
+
+def legend_below(ax):
+    """The legend under the axes (outside the data), one entry a line."""
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), borderaxespad=0.0)
 
 
 def refinement_grid(pairs, meshes=2):
@@ -374,8 +382,15 @@ def _short(value):
 
 def save_figure(fig, path):
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight")  # legends sit outside the axes
     print(f"wrote {pathlib.Path(path).resolve()}")
+
+
+def extrapolated_reference(path, column="tip_deflection_7s_m"):
+    """Our Richardson-extrapolated value from a study's reference CSV (to
+    redraw its figure)."""
+    row = next(r for r in read_csv(path) if r["code"] == OURS and r["h_or_elements"] == "extrapolated")
+    return float(row[column])
 
 
 def cheapest_at(rows, level, error_key="error"):

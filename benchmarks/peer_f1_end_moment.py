@@ -24,9 +24,9 @@ import time
 
 import numpy as np
 
-from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, best_of, exudyn_beam_line_2d, \
-    exudyn_clamp_coordinates, exudyn_settings, exudyn_solve, figure, load_scene, plot_precision_work, save_figure, \
-    study_arguments, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
+    exudyn_settings, exudyn_solve, figure, load_scene, plot_precision_work, read_csv, save_figure, study_arguments, \
+    write_csv
 
 L, EI = 1.0, 1.0
 EA = 1e7 * EI / L**2
@@ -113,9 +113,8 @@ def exudyn_static(build, n):
     return dict(wall_time_s=wall, error=tip_error(p[0], p[1]), **statistics)
 
 
-def main():
-    args = study_arguments(__doc__, repeats=3)
-
+def run_study(args):
+    """Runs every code of the study; its rows."""
     factory = SceneFactory()
     try:
         fmus = {n: factory.fmu(scene_with_elements(n), f"moment{n}") for n in ELEMENTS}
@@ -136,8 +135,17 @@ def main():
                       f"{r['newton_iterations']}", flush=True)
     finally:
         factory.close()
+    return rows
+
+
+def main():
+    args = study_arguments(__doc__, repeats=3)
     csv_path = args.out / "f1_end_moment_precision.csv"
-    write_csv(csv_path, rows)
+    if args.replot:
+        rows = read_csv(csv_path)
+    else:
+        rows = run_study(args)
+        write_csv(csv_path, rows)
 
     fig, ax = figure()
     plot_precision_work(ax, rows, floor=1e-10)

@@ -24,8 +24,8 @@ Writes f3_vibration_precision.csv and .png.
 import numpy as np
 from scipy.optimize import least_squares
 
-from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
-    exudyn_settings, exudyn_solve, figure, grid_study, load_scene, mesh_and_step, plot_precision_work, \
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
+    exudyn_settings, exudyn_solve, figure, grid_study, load_scene, mesh_and_step, plot_precision_work, read_csv, \
     refinement_grid, save_figure, study_arguments, write_csv
 
 L, EI, RHO_A, EA, RHO_I = 1.0, 1.0, 1.0, 1e6, 1e-6
@@ -117,9 +117,8 @@ def frequency_error(r, exact=EXACT[0]):
     return dict(error=error, f1_hz=r["f1"]), f"f1 {r['f1']:.7f} Hz (relative error {error:8.2e})"
 
 
-def main():
-    args = study_arguments(__doc__, repeats=2)
-
+def run_study(args):
+    """Runs every code of the study; its rows."""
     factory = SceneFactory()
     try:
         fmus = {n: factory.fmu(vibration_scene(n), f"vibration{n}") for n, _ in GRID}
@@ -129,8 +128,17 @@ def main():
                           GRID, args.repeats, frequency_error)
     finally:
         factory.close()
+    return rows
+
+
+def main():
+    args = study_arguments(__doc__, repeats=2)
     csv_path = args.out / "f3_vibration_precision.csv"
-    write_csv(csv_path, rows)
+    if args.replot:
+        rows = read_csv(csv_path)
+    else:
+        rows = run_study(args)
+        write_csv(csv_path, rows)
 
     fig, ax = figure()
     plot_precision_work(ax, rows, annotate=mesh_and_step)

@@ -34,8 +34,8 @@ Writes f4_motor_precision.csv, f4_motor_reference.csv and f4_motor_precision.png
 import numpy as np
 
 from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, exudyn_beam_line_2d, exudyn_settings, exudyn_solve, \
-    figure, grid_study, load_scene, mesh_and_step, plot_precision_work, read_csv, refinement_grid, save_figure, \
-    study_arguments, write_csv
+    extrapolated_reference, figure, grid_study, load_scene, mesh_and_step, plot_precision_work, read_csv, \
+    refinement_grid, save_figure, study_arguments, write_csv
 from peer_f4_spin_up import EA, EI, GA, L, RHO_A, RHO_I, RHO_INF, _hub_offset, _hub_rate, extrapolated, hub_angle
 
 HUB_MASS, HUB_INERTIA = 10.0, 2.0
@@ -121,6 +121,10 @@ def tip_error(r, reference):
 
 def main():
     args = study_arguments(__doc__, repeats=2)
+    png = args.out / "f4_motor_precision.png"
+    if args.replot:
+        return plot(read_csv(args.out / "f4_motor_precision.csv"),
+                    extrapolated_reference(args.out / "f4_motor_reference.csv"), png)
 
     factory = SceneFactory()
     try:
@@ -159,14 +163,16 @@ def main():
         factory.close()
     write_csv(args.out / "f4_motor_precision.csv", rows)
     write_csv(args.out / "f4_motor_reference.csv", reference_rows)
+    plot(rows, reference, png)
 
+
+def plot(rows, reference, png):
     fig, ax = figure(figsize=(6.4, 4.8))
     plot_precision_work(ax, rows, annotate=mesh_and_step)
     ax.set_ylabel("tip deflection error at t = 7 s [m]")
     ax.set_xlabel("wall time for 7 s simulated [s]")
     ax.set_title(f"F4 motor-driven hub: tip deflection at 7 s vs converged {reference:.6f} m\n"
                  "(labels: elements / substep)", fontsize=9)
-    png = args.out / "f4_motor_precision.png"
     save_figure(fig, png)
 
 

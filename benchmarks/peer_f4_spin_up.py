@@ -33,8 +33,8 @@ Writes f4_spin_up_precision.csv, f4_spin_up_reference.csv and f4_spin_up_precisi
 import numpy as np
 
 from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
-    exudyn_settings, exudyn_solve, figure, grid_study, load_scene, mesh_and_step, plot_precision_work, \
-    refinement_grid, save_figure, study_arguments, write_csv
+    exudyn_settings, exudyn_solve, extrapolated_reference, figure, grid_study, load_scene, mesh_and_step, \
+    plot_precision_work, read_csv, refinement_grid, save_figure, study_arguments, write_csv
 
 L, EA, GA, EI, RHO_A, RHO_I = 10.0, 2.8e7, 1e7, 1.4e4, 1.2, 6e-4
 T_UP, OMEGA = 15.0, 6.0
@@ -144,6 +144,10 @@ def errors(r, reference):
 
 def main():
     args = study_arguments(__doc__, repeats=2)
+    png = args.out / "f4_spin_up_precision.png"
+    if args.replot:
+        return plot(read_csv(args.out / "f4_spin_up_precision.csv"),
+                    extrapolated_reference(args.out / "f4_spin_up_reference.csv"), png)
 
     factory = SceneFactory()
     try:
@@ -174,7 +178,10 @@ def main():
         factory.close()
     write_csv(args.out / "f4_spin_up_precision.csv", rows)
     write_csv(args.out / "f4_spin_up_reference.csv", reference_rows)
+    plot(rows, reference, png)
 
+
+def plot(rows, reference, png):
     fig, (a, b) = figure(2, (12, 4.8))
     plot_precision_work(a, rows, annotate=mesh_and_step)
     a.set_ylabel("tip deflection error at t = 7 s [m]")
@@ -184,7 +191,6 @@ def main():
     b.set_title(f"F4 steady elongation vs {ELONGATION:.6e} m (labels: elements / substep)", fontsize=9)
     for ax in (a, b):
         ax.set_xlabel("wall time for 20 s simulated [s]")
-    png = args.out / "f4_spin_up_precision.png"
     save_figure(fig, png)
 
 

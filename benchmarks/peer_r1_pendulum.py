@@ -25,7 +25,7 @@ import time
 import numpy as np
 
 from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, save_figure, study_arguments, write_csv
+    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
 
 G, L, MASS, STOP = 9.81, 1.0, 1.0, 10.0
 R1_AT_10S = (0.275087462576, -0.961419205099)
@@ -92,9 +92,8 @@ def exudyn_mass_point(h):
     return dict(wall_time_s=wall, error=position_error(p[0], p[1]), **statistics)
 
 
-def main():
-    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "pendulum.fmu")
-
+def run_study(args):
+    """Runs every code of the study; its rows."""
     codes = [(OURS, "revolute joint, joint coordinate", lambda h: ours(args.fmu, h)),
              (EXUDYN, "KinematicTree RevoluteZ (joint coordinate)", exudyn_kinematic_tree),
              (EXUDYN, "MassPoint2D + ConnectorDistance (index 3)", exudyn_mass_point)]
@@ -109,8 +108,17 @@ def main():
             print(f"R1 {code:9s} {model:45s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:9.2f} ms  "
                   f"error at 10 s {r['error']:9.2e} m  Newton it/step {r['newton_iterations'] / r['steps']:4.2f}",
                   flush=True)
+    return rows
+
+
+def main():
+    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "pendulum.fmu")
     csv_path = args.out / "r1_pendulum_precision.csv"
-    write_csv(csv_path, rows)
+    if args.replot:
+        rows = read_csv(csv_path)
+    else:
+        rows = run_study(args)
+        write_csv(csv_path, rows)
 
     fig, ax = figure()
     plot_precision_work(ax, rows)

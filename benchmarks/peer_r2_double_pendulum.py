@@ -33,7 +33,7 @@ Writes r2_double_pendulum_precision.csv and .png.
 import numpy as np
 
 from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, save_figure, study_arguments, write_csv
+    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
 
 G, L, MASS, STOP, OUTPUT = 9.81, 1.0, 1.0, 10.0, 0.01
 J = MASS * L * L / 12  # about the centre of mass, perpendicular to the bar
@@ -142,9 +142,8 @@ def exudyn_rigid_bodies(h):
     return dict(wall_time_s=wall, rho_inf=RHO_INF_EXUDYN_REDUNDANT, **metrics(p, v, w, angle), **statistics)
 
 
-def main():
-    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "double_pendulum.fmu")
-
+def run_study(args):
+    """Runs every code of the study; its rows."""
     codes = [(OURS, "two revolute joints, joint coordinates", lambda h: ours(args.fmu, h)),
              (EXUDYN, "KinematicTree 2 x RevoluteZ (joint coordinates)", exudyn_kinematic_tree),
              (EXUDYN, f"RigidBody2D + RevoluteJoint2D (index 3, rho_inf {RHO_INF_EXUDYN_REDUNDANT})",
@@ -160,8 +159,17 @@ def main():
             print(f"R2 {code:9s} {model:48s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:9.2f} ms  "
                   f"energy drift {r['error']:9.2e} m g L  constraint drift {r['constraint_drift']:8.1e} m  "
                   f"Newton it/step {r['newton_iterations'] / r['steps']:4.2f}", flush=True)
+    return rows
+
+
+def main():
+    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "double_pendulum.fmu")
     csv_path = args.out / "r2_double_pendulum_precision.csv"
-    write_csv(csv_path, rows)
+    if args.replot:
+        rows = read_csv(csv_path)
+    else:
+        rows = run_study(args)
+        write_csv(csv_path, rows)
 
     fig, axes = figure(2, (12, 5))
     plot_precision_work(axes[0], rows)

@@ -43,7 +43,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from peer_common import EXUDYN, OURS, ROOT, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, save_figure, study_arguments, write_csv
+    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
 
 N, G, MASS, L = 40, 9.81, 1.0, 1.0
 J = MASS * L * L / 12
@@ -166,9 +166,8 @@ def exudyn_rigid_bodies(h):
     return dict(wall_time_s=wall, **metrics(p, v, w, angle), **statistics)
 
 
-def main():
-    args = study_arguments(__doc__, repeats=2)
-
+def run_study(args):
+    """Runs every code of the study; its rows, and the full-length run."""
     factory = SceneFactory()
     try:
         fmu = factory.fmu(scene(), "n_four_bar")
@@ -201,9 +200,19 @@ def main():
               f"{r.get('rejected_steps', '-')}", flush=True)
     finally:
         factory.close()
+    return rows, full
+
+
+def main():
+    args = study_arguments(__doc__, repeats=2)
     csv_path = args.out / "r3_n_four_bar_precision.csv"
-    write_csv(csv_path, rows)
-    write_csv(args.out / "r3_n_four_bar_full.csv", [full])
+    if args.replot:
+        rows, full = read_csv(csv_path), read_csv(args.out / "r3_n_four_bar_full.csv")[0]
+        full = {**full, "error": float(full["error"]), "wall_time_s": float(full["wall_time_s"])}
+    else:
+        rows, full = run_study(args)
+        write_csv(csv_path, rows)
+        write_csv(args.out / "r3_n_four_bar_full.csv", [full])
 
     fig, axes = figure(3, (16, 5))
     plot_precision_work(axes[0], rows)

@@ -37,7 +37,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, save_figure, study_arguments, write_csv
+    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
 
 G, MASS, L, A, STOP, OUTPUT = 9.81, 1.0, 1.0, 0.1, 10.0, 0.01
 POINTS = np.array([(0, 0, 0), (1, 0, 0), (1, -1, 0), (1, -1, 1), (0, -1, 1), (0, 0, 1)], dtype=float)
@@ -142,9 +142,8 @@ def exudyn_rigid_bodies(h):
     return dict(wall_time_s=wall, **metrics(p, v, R, w), **statistics)
 
 
-def main():
-    args = study_arguments(__doc__, repeats=2, fmu=FMUS / "bricard.fmu")
-
+def run_study(args):
+    """Runs every code of the study; its rows."""
     codes = [(OURS, "5 revolute tree joints + 1 cut joint (redundant row)", lambda h: ours(args.fmu, h)),
              (EXUDYN, "RigidBody EP + 6 JointRevoluteZ, ignoreSingularJacobian", exudyn_rigid_bodies)]
     rows = []
@@ -158,8 +157,17 @@ def main():
             print(f"R4 {code:9s} {model:56s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:9.2f} ms  "
                   f"energy drift {r['error']:9.2e} m g L  constraint drift {r['constraint_drift']:8.1e}  "
                   f"Newton it/step {r['newton_iterations'] / r['steps']:4.2f}", flush=True)
+    return rows
+
+
+def main():
+    args = study_arguments(__doc__, repeats=2, fmu=FMUS / "bricard.fmu")
     csv_path = args.out / "r4_bricard_precision.csv"
-    write_csv(csv_path, rows)
+    if args.replot:
+        rows = read_csv(csv_path)
+    else:
+        rows = run_study(args)
+        write_csv(csv_path, rows)
 
     fig, axes = figure(2, (12, 5))
     plot_precision_work(axes[0], rows)

@@ -31,7 +31,7 @@ Writes r5_slider_crank_precision.csv and .png.
 import numpy as np
 
 from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, save_figure, study_arguments, write_csv
+    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
 
 R, LC, E, OMEGA, G = 0.5, 2.0, 0.1, 2 * np.pi, 9.81
 STOP, OUTPUT = 2.0, 0.01
@@ -133,9 +133,8 @@ def exudyn_rigid_bodies(h):
     return dict(wall_time_s=wall, **metrics(position[:, 0], position[:, 1], velocity[:, 1]), **statistics)
 
 
-def main():
-    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "slider_crank.fmu")
-
+def run_study(args):
+    """Runs every code of the study; its rows."""
     codes = [(OURS, "revolute + prismatic tree, cut at the slider pin, driven crank", lambda h: ours(args.fmu, h)),
              (EXUDYN, "RigidBody2D + Revolute/PrismaticJoint2D, driven coordinate", exudyn_rigid_bodies)]
     rows = []
@@ -149,8 +148,17 @@ def main():
             print(f"R5 {code:9s} {model:62s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:8.2f} ms  "
                   f"position error {r['error']:8.1e} m  velocity error {r['velocity_error']:8.2e} m/s  "
                   f"Newton it/step {r['newton_iterations'] / r['steps']:4.2f}", flush=True)
+    return rows
+
+
+def main():
+    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "slider_crank.fmu")
     csv_path = args.out / "r5_slider_crank_precision.csv"
-    write_csv(csv_path, rows)
+    if args.replot:
+        rows = read_csv(csv_path)
+    else:
+        rows = run_study(args)
+        write_csv(csv_path, rows)
 
     fig, axes = figure(2, (12, 5))
     plot_precision_work(axes[0], rows, floor=1e-17)

@@ -33,7 +33,7 @@ import math
 import numpy as np
 
 from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, save_figure, study_arguments, write_csv
+    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
 
 G, OMEGA = 9.81, 2 * math.pi
 DENSITY, SECTION, LENGTH = 3000.0, 0.01, 1.0
@@ -130,9 +130,8 @@ def deviation(run, reference):
             float(np.max(np.abs(run["hinge"][:n] - reference["hinge"][:n]))))
 
 
-def main():
-    args = study_arguments(__doc__, repeats=2, fmu=FMUS / "flyball_governor.fmu")
-
+def run_study(args):
+    """Runs every code of the study; its rows."""
     reference = ours(args.fmu, REFERENCE_H)
     print(f"R6 reference: ours at h = {REFERENCE_H:g} ({reference['wall_time_s']:.2f} s, "
           f"{reference['rejected_steps']} rejected substeps)", flush=True)
@@ -150,8 +149,17 @@ def main():
             print(f"R6 {code:9s} {model:54s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:8.2f} ms  "
                   f"slider error {error:8.2e} m  hinge error {hinge_error:8.2e} rad  Newton it/step "
                   f"{r['newton_iterations'] / r['steps']:4.2f}  rejected {r.get('rejected_steps', '-')}", flush=True)
+    return rows
+
+
+def main():
+    args = study_arguments(__doc__, repeats=2, fmu=FMUS / "flyball_governor.fmu")
     csv_path = args.out / "r6_flyball_governor_precision.csv"
-    write_csv(csv_path, rows)
+    if args.replot:
+        rows = read_csv(csv_path)
+    else:
+        rows = run_study(args)
+        write_csv(csv_path, rows)
 
     fig, axes = figure(2, (12, 5))
     plot_precision_work(axes[0], rows)

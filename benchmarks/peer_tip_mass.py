@@ -37,8 +37,8 @@ Writes tip_mass_precision.csv and .png.
 import numpy as np
 from scipy.optimize import brentq
 
-from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
-    exudyn_settings, exudyn_solve, figure, grid_study, mesh_and_step, plot_precision_work, refinement_grid, \
+from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
+    exudyn_settings, exudyn_solve, figure, grid_study, mesh_and_step, plot_precision_work, read_csv, refinement_grid, \
     save_figure, study_arguments, write_csv
 from peer_f3_vibration import first_frequency, frequency_error
 
@@ -123,9 +123,8 @@ def exudyn_beam_2d(n, h):
     return dict(wall_time_s=wall, f1=first_frequency(data[:, 0], data[:, 2], EXACT), **statistics)
 
 
-def main():
-    args = study_arguments(__doc__, repeats=2)
-
+def run_study(args):
+    """Runs every code of the study; its rows."""
     factory = SceneFactory()
     try:
         fmus = {n: factory.fmu(tip_mass_scene(n), f"tip{n}") for n, _ in GRID}
@@ -135,8 +134,17 @@ def main():
                           GRID, args.repeats, lambda r: frequency_error(r, EXACT[0]))
     finally:
         factory.close()
+    return rows
+
+
+def main():
+    args = study_arguments(__doc__, repeats=2)
     csv_path = args.out / "tip_mass_precision.csv"
-    write_csv(csv_path, rows)
+    if args.replot:
+        rows = read_csv(csv_path)
+    else:
+        rows = run_study(args)
+        write_csv(csv_path, rows)
 
     fig, ax = figure()
     plot_precision_work(ax, rows, annotate=mesh_and_step)

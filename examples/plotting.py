@@ -22,17 +22,17 @@ def save_table(path: pathlib.Path, columns: dict) -> None:
 
 def save_figure(path: pathlib.Path, t, panels: list, title: str) -> None:
     """panels: [(y label, {curve label: values})], one axis each, shared time."""
-    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.6 * len(panels)), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.6 * len(panels)), sharex=True, squeeze=False,
+                             layout="constrained")
     for ax, (label, curves) in zip(axes[:, 0], panels):
         for name, y in curves.items():
             ax.plot(t, y, label=name, lw=1)
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
-        if len(curves) > 1:
-            ax.legend(fontsize=7, loc="upper right", ncol=2)
+        if len(curves) > 1:  # outside the axes: it never hides a curve
+            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -1,12 +1,16 @@
 // mfbd-pack: scene.json -> self-contained FMI 2.0 Co-Simulation .fmu
 //   modelDescription.xml       from the scene's variable table
 //   resources/scene.json       the scene, verbatim (its hash is the GUID)
+//   resources/visual/<file>   mesh files (STL, OBJ) named by the bodies' "visual"
 //   binaries/linux64/<id>.so   the one FMU binary, renamed to the model identifier,
 //                              with every non-runtime library it needs (RUNPATH $ORIGIN)
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <sstream>
+
+#include <nlohmann/json.hpp>
 
 #include "model_description.hpp"
 #include "zip_writer.hpp"
@@ -31,6 +35,42 @@ std::string readFile(const fs::path& p) {
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+// The mesh files that bodies' "visual" entries name (relative to the scene
+// file), as resources/visual/<file name>, where the drawing tools look.
+std::vector<mfbd::ZipEntry> visualMeshFiles(const std::string& sceneText, const fs::path& sceneDir) {
+  const auto doc = nlohmann::json::parse(sceneText);
+  std::map<std::string, std::pair<std::string, std::string>> files;  // file name -> (path in the scene, JSON path)
+  if (!doc.contains("bodies")) return {};
+  for (std::size_t i = 0; i < doc["bodies"].size(); ++i) {
+    const auto& body = doc["bodies"][i];
+    if (!body.contains("visual")) continue;
+    const auto& v = body["visual"];
+    const auto items = v.is_array() ? v : nlohmann::json::array({v});
+    for (std::size_t k = 0; k < items.size(); ++k) {
+      if (!items[k].is_object() || !items[k].contains("file")) continue;
+      const std::string where = "bodies[" + std::to_string(i) + "].visual" +
+                                (v.is_array() ? "[" + std::to_string(k) + "]" : "") + ".file";
+      if (!items[k]["file"].is_string()) throw std::runtime_error(where + ": expected a file name (STL or OBJ)");
+      const std::string file = items[k]["file"];
+      const std::string name = fs::path(file).filename().string();
+      const auto known = files.find(name);
+      if (known != files.end() && known->second.first != file)
+        throw std::runtime_error(where + ": '" + file + "' has the file name of '" + known->second.first +
+                                 "'; mesh files need different names");
+      files[name] = {file, where};
+    }
+  }
+  std::vector<mfbd::ZipEntry> entries;
+  for (const auto& [name, source] : files) {
+    const auto& [file, where] = source;
+    const fs::path path = fs::path(file).is_absolute() ? fs::path(file) : sceneDir / file;
+    if (!fs::is_regular_file(path))
+      throw std::runtime_error(where + ": mesh file '" + file + "' not found (looked at " + path.string() + ")");
+    entries.push_back({"resources/visual/" + name, readFile(path)});
+  }
+  return entries;
 }
 
 }  // namespace
@@ -78,6 +118,7 @@ int main(int argc, char** argv) {
     entries.push_back({"modelDescription.xml",
                        mfbd::modelDescriptionXml(scene, table, mfbd::sceneGuid(text), id, caps)});
     entries.push_back({"resources/scene.json", text});
+    for (auto& mesh : visualMeshFiles(text, fs::path(scenePath).parent_path())) entries.push_back(std::move(mesh));
     const fs::path binDir(binaries);
     if (!fs::is_regular_file(binDir / "mfbd_fmu.so"))
       throw std::runtime_error("binaries folder '" + binaries + "' has no mfbd_fmu.so (build the project first)");

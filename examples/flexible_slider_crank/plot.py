@@ -16,19 +16,29 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
 from plotting import save_figure, save_table  # noqa: E402
 
 
+def midspan_deflection(column, nodes):
+    """Deflection of the rod's middle exposed node from the chord of its end
+    nodes, in the plane of motion (m); column(name) gives an output over time."""
+    first, mid, last = nodes[0], nodes[len(nodes) // 2], nodes[-1]
+    p = {i: np.column_stack([column(f"rod.node{i}.position.x"), column(f"rod.node{i}.position.y")])
+         for i in (first, mid, last)}
+    chord = (p[last] - p[first]) / np.linalg.norm(p[last] - p[first], axis=1)[:, None]
+    offset = p[mid] - 0.5 * (p[first] + p[last])
+    return chord[:, 0] * offset[:, 1] - chord[:, 1] * offset[:, 0]
+
+
+def exposed_nodes(md):
+    return sorted({int(v.name.split(".")[1][4:]) for v in md.modelVariables if v.name.startswith("rod.node")})
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("fmu", type=pathlib.Path)
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out"))
     args = parser.parse_args()
     md = read_model_description(str(args.fmu))
-    nodes = sorted({int(v.name.split(".")[1][4:]) for v in md.modelVariables if v.name.startswith("rod.node")})
-    first, mid, last = nodes[0], nodes[len(nodes) // 2], nodes[-1]
     r = simulate_fmu(str(args.fmu), output_interval=1e-3)
-    p = {i: np.column_stack([r[f"rod.node{i}.position.x"], r[f"rod.node{i}.position.y"]]) for i in (first, mid, last)}
-    chord = (p[last] - p[first]) / np.linalg.norm(p[last] - p[first], axis=1)[:, None]
-    offset = p[mid] - 0.5 * (p[first] + p[last])
-    deflection = chord[:, 0] * offset[:, 1] - chord[:, 1] * offset[:, 0]
+    deflection = midspan_deflection(lambda name: r[name], exposed_nodes(md))
     t = r["time"]
     columns = {"time": t, "midspan_deflection": deflection, "slider.x": r["slider.position.x"],
                "crank_drive.drive_torque": r["crank_drive.drive_torque"]}

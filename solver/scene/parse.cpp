@@ -119,9 +119,19 @@ Mat3 parseInertia(const Field& f) {
   return J;
 }
 
+// "visual" (shapes, colours) is for the drawing tools (python/mfbd), not the
+// physics: only its type is checked here.
+void checkVisual(const Field& owner) {
+  if (!owner.has("visual")) return;
+  const json& v = owner.at("visual").raw();
+  if (!v.is_object() && !v.is_array())
+    owner.at("visual").fail("expected an object (shape, size, color, ...) or a list of them, got " + typeName(v));
+}
+
 BodySpec parseBody(const Field& f) {
-  f.expectObject({"name", "mass", "inertia", "center_of_mass", "position", "orientation"},
+  f.expectObject({"name", "mass", "inertia", "center_of_mass", "position", "orientation", "visual"},
                  {"name", "mass", "inertia", "position"});
+  checkVisual(f);
   BodySpec b;
   b.name = f.at("name").identifier();
   b.mass = f.at("mass").nonNegative();  // 0: a massless body, its motion fixed by joints

@@ -174,8 +174,10 @@ void parseMesh(const Field& f, FlexibleBodySpec& b) {
 
 FlexibleBodySpec parseFlexibleBody(const Field& f) {
   f.expectObject({"name", "beam", "nodes", "elements", "section_y", "section", "material", "damping", "mass", "supports",
-                  "point_masses", "loads", "outputs"},
+                  "point_masses", "loads", "outputs", "visual"},
                  {"name", "section"});
+  if (f.has("visual") && !f.at("visual").raw().is_object())  // for the drawing tools only
+    f.at("visual").fail("expected an object (color, section), got " + typeName(f.at("visual").raw()));
   FlexibleBodySpec b;
   b.name = f.at("name").identifier();
   if (f.has("beam") == f.has("nodes")) f.fail("expected either \"beam\" (a line) or \"nodes\" and \"elements\"");
