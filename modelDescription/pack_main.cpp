@@ -34,7 +34,6 @@ struct Platform {
 };
 const Platform kPlatforms[] = {{"linux64", ".so"}, {"win64", ".dll"}};
 
-
 std::string readFile(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   if (!in) throw std::runtime_error(p.string() + ": cannot read");
@@ -43,12 +42,10 @@ std::string readFile(const fs::path& p) {
   return s.str();
 }
 
-}  // namespace
-
 // binaries/<platform>/<id><ext> for each platform asked for ("all": each
 // one built); an asked platform that is not built is an error.
-static void addBinaries(const fs::path& root, const std::string& asked, const std::string& id,
-                        std::vector<mfbd::ZipEntry>& entries) {
+void addBinaries(const fs::path& root, const std::string& asked, const std::string& id,
+                 std::vector<mfbd::ZipEntry>& entries) {
   std::string names;
   bool known = false, any = false;
   for (const Platform& p : kPlatforms) {
@@ -58,14 +55,18 @@ static void addBinaries(const fs::path& root, const std::string& asked, const st
     const fs::path binary = root / p.name / (std::string("mfbd_fmu") + p.extension);
     if (!fs::is_regular_file(binary)) {
       if (asked == "all") continue;
-      throw std::runtime_error("--platform " + asked + ": no " + binary.string() + " (build it first; README, Platforms)");
+      throw std::runtime_error("--platform " + asked + ": no " + binary.string() +
+                               " (build it first; README, Platforms)");
     }
     entries.push_back({std::string("binaries/") + p.name + "/" + id + p.extension, readFile(binary)});
     any = true;
   }
   if (!known) throw std::runtime_error("--platform '" + asked + "': expected all, " + names);
-  if (!any) throw std::runtime_error("binaries folder '" + root.string() + "' has no FMU binary (build the project first)");
+  if (!any)
+    throw std::runtime_error("binaries folder '" + root.string() + "' has no FMU binary (build the project first)");
 }
+
+}  // namespace
 
 int main(int argc, char** argv) {
   std::string scenePath, outPath, binaries = MFBD_FMU_BINARY_ROOT, platform = "all";
