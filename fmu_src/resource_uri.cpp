@@ -13,7 +13,7 @@ int hexValue(char c) {
 }
 }  // namespace
 
-bool resourceUriToPath(const std::string& uri, std::string& path, std::string& why) {
+bool resourceUriToPath(const std::string& uri, std::string& path, std::string& why, PathStyle style) {
   const std::string scheme = "file:";
   if (uri.size() < scheme.size() || uri.compare(0, scheme.size(), scheme) != 0) {
     why = "expected a file: URI, got \"" + uri + "\"";
@@ -42,11 +42,28 @@ bool resourceUriToPath(const std::string& uri, std::string& path, std::string& w
     const int hi = i + 2 < rest.size() ? hexValue(rest[i + 1]) : -1;
     const int lo = i + 2 < rest.size() ? hexValue(rest[i + 2]) : -1;
     if (hi < 0 || lo < 0) {
-      why = "bad percent-escape in \"" + uri + "\"";
+      why = "malformed percent-escape \"" + rest.substr(i, 3) + "\" in \"" + uri +
+            "\" (expected % and two hexadecimal digits)";
+      return false;
+    }
+    if (hi == 0 && lo == 0) {
+      // A NUL would end the path early for the C library: another file.
+      why = "percent-escape \"%00\" (a NUL character) in \"" + uri + "\" cannot be part of a file name";
       return false;
     }
     path += char(hi * 16 + lo);
     i += 2;
+  }
+  if (style == PathStyle::Windows) {
+    // "/C:/dir" -> "C:/dir"; the drive letter is checked after decoding,
+    // since a URI may escape the colon (file:///C%3A/dir).
+    const bool drive = path.size() >= 3 && std::isalpha(static_cast<unsigned char>(path[1])) && path[2] == ':' &&
+                       (path.size() == 3 || path[3] == '/' || path[3] == '\\');
+    if (!drive) {
+      why = "expected a drive letter in \"" + uri + "\" (as in file:///C:/dir)";
+      return false;
+    }
+    path.erase(0, 1);
   }
   return true;
 }

@@ -1,9 +1,9 @@
 // mfbd-pack: scene.json -> self-contained FMI 2.0 Co-Simulation .fmu
 //   modelDescription.xml       from the scene's variable table
 //   resources/scene.json       the scene, verbatim (its hash is the GUID)
-//   resources/visual/<file>   mesh files (STL, OBJ) named by the bodies' "visual"
-//   binaries/linux64/<id>.so   the one FMU binary, renamed to the model identifier,
-//                              with every non-runtime library it needs (RUNPATH $ORIGIN)
+//   resources/visual/<file>    mesh files (STL, OBJ) named by the bodies' "visual"
+//   binaries/linux64/<id>.so   the FMU binary of each platform built (or asked
+//   binaries/win64/<id>.dll    for), renamed to the model identifier
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -15,8 +15,8 @@
 #include "model_description.hpp"
 #include "zip_writer.hpp"
 
-#ifndef MFBD_FMU_BINARY_DIR
-#define MFBD_FMU_BINARY_DIR ""
+#ifndef MFBD_FMU_BINARY_ROOT
+#define MFBD_FMU_BINARY_ROOT ""
 #endif
 
 namespace fs = std::filesystem;
@@ -24,10 +24,19 @@ namespace fs = std::filesystem;
 namespace {
 
 const char* kUsage =
-    "usage: mfbd-pack SCENE.json -o OUT.fmu [--binaries DIR]\n"
+    "usage: mfbd-pack SCENE.json -o OUT.fmu [--platform NAME] [--binaries DIR]\n"
     "       mfbd-pack --guid SCENE.json   (print the GUID an FMU of this scene gets)\n"
-    "  --binaries DIR  folder with mfbd_fmu.so and the libraries it ships with\n"
-    "                  (default: " MFBD_FMU_BINARY_DIR ")\n";
+    "  --platform NAME  linux64, win64 or all (default): the platforms whose binary\n"
+    "                   the FMU carries; all = every one built\n"
+    "  --binaries DIR   folder with one subfolder per platform: linux64/mfbd_fmu.so,\n"
+    "                   win64/mfbd_fmu.dll (default: " MFBD_FMU_BINARY_ROOT ")\n";
+
+// FMI 2.0 platform folder and the binary's file extension there.
+struct Platform {
+  const char* name;
+  const char* extension;
+};
+const Platform kPlatforms[] = {{"linux64", ".so"}, {"win64", ".dll"}};
 
 std::string readFile(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -73,16 +82,41 @@ std::vector<mfbd::ZipEntry> visualMeshFiles(const std::string& sceneText, const 
   return entries;
 }
 
+// binaries/<platform>/<id><ext> for each platform asked for ("all": each
+// one built); an asked platform that is not built is an error.
+void addBinaries(const fs::path& root, const std::string& asked, const std::string& id,
+                 std::vector<mfbd::ZipEntry>& entries) {
+  std::string names;
+  bool known = false, any = false;
+  for (const Platform& p : kPlatforms) {
+    names += names.empty() ? p.name : std::string(", ") + p.name;
+    if (asked != "all" && asked != p.name) continue;
+    known = true;
+    const fs::path binary = root / p.name / (std::string("mfbd_fmu") + p.extension);
+    if (!fs::is_regular_file(binary)) {
+      if (asked == "all") continue;
+      throw std::runtime_error("--platform " + asked + ": no " + binary.string() +
+                               " (build it first; README, Platforms)");
+    }
+    entries.push_back({std::string("binaries/") + p.name + "/" + id + p.extension, readFile(binary)});
+    any = true;
+  }
+  if (!known) throw std::runtime_error("--platform '" + asked + "': expected all, " + names);
+  if (!any)
+    throw std::runtime_error("binaries folder '" + root.string() + "' has no FMU binary (build the project first)");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string scenePath, outPath, binaries = MFBD_FMU_BINARY_DIR;
+  std::string scenePath, outPath, binaries = MFBD_FMU_BINARY_ROOT, platform = "all";
   bool printGuid = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "-o" && i + 1 < argc) outPath = argv[++i];
     else if (a == "--guid") printGuid = true;
     else if (a == "--binaries" && i + 1 < argc) binaries = argv[++i];
+    else if (a == "--platform" && i + 1 < argc) platform = argv[++i];
     else if (a == "-h" || a == "--help") {
       std::cout << kUsage;
       return 0;
@@ -119,14 +153,7 @@ int main(int argc, char** argv) {
                        mfbd::modelDescriptionXml(scene, table, mfbd::sceneGuid(text), id, caps)});
     entries.push_back({"resources/scene.json", text});
     for (auto& mesh : visualMeshFiles(text, fs::path(scenePath).parent_path())) entries.push_back(std::move(mesh));
-    const fs::path binDir(binaries);
-    if (!fs::is_regular_file(binDir / "mfbd_fmu.so"))
-      throw std::runtime_error("binaries folder '" + binaries + "' has no mfbd_fmu.so (build the project first)");
-    for (const auto& f : fs::directory_iterator(binDir)) {
-      if (!f.is_regular_file()) continue;
-      const std::string name = f.path().filename() == "mfbd_fmu.so" ? id + ".so" : f.path().filename().string();
-      entries.push_back({"binaries/linux64/" + name, readFile(f.path())});
-    }
+    addBinaries(binaries, platform, id, entries);
     mfbd::writeZip(outPath, entries);
     std::cout << "mfbd-pack: wrote " << outPath << " (" << table.size() << " variables)\n";
   } catch (const std::exception& e) {
