@@ -71,21 +71,22 @@ VectorXd masslessFreeMotion(const Eigen::MatrixXd& M, const Eigen::MatrixXd& C) 
   return d.asDiagonal() * eigen.eigenvectors().col(0);
 }
 
-// The error for motion x: the joint with the largest rate in it (and the
-// other joints that take part), its child body and what that body carries.
+// The error for motion x: the joint nearest ground among those whose rates
+// take part (the others named beside it), its child body and what that
+// body carries.
 SceneError singularMotion(const Scene& scene, const Model& model, const Data& data, const VectorXd& x) {
-  std::vector<std::pair<double, int>> share;  // largest rate of each tree joint in x, joint
+  std::vector<int> children;  // bodies in tree order (parent first) whose inboard joint takes part
   for (int i = 0; i < int(model.bodies.size()); ++i) {
     const Joint& j = model.joints[model.bodies[i].inboardJoint];
-    if (j.dofs > 0) share.push_back({x.segment(j.velocityOffset, j.dofs).cwiseAbs().maxCoeff(), i});
+    if (j.dofs > 0 && x.segment(j.velocityOffset, j.dofs).cwiseAbs().maxCoeff() > 0.1 * x.cwiseAbs().maxCoeff())
+      children.push_back(i);
   }
-  std::sort(share.rbegin(), share.rend());
-  const int child = share.front().second;
+  const int child = children.front();
   const int joint = model.bodies[child].inboardJoint;
   std::string others;
-  for (std::size_t k = 1; k < share.size() && share[k].first > 0.1 * share.front().first; ++k)
-    others += std::string(others.empty() ? " (together with " : ", ") + "'" +
-              model.joints[model.bodies[share[k].second].inboardJoint].name + "'";
+  for (std::size_t k = 1; k < children.size(); ++k)
+    others += std::string(k == 1 ? " (together with " : ", ") + "'" +
+              model.joints[model.bodies[children[k]].inboardJoint].name + "'";
   if (!others.empty()) others += ")";
   std::string jointPath = "joints", bodyPath = "bodies";
   for (std::size_t i = 0; i < scene.joints.size(); ++i)

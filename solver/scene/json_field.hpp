@@ -195,15 +195,20 @@ class Field {
     return out;
   }
 
+  // Three numbers, checked in order (the first bad one is named).
   Vec3 vec3() const {
     if (arraySize() != 3) fail("expected 3 numbers, got " + std::to_string(j_.size()));
-    return Vec3(at(0).number(), at(1).number(), at(2).number());
+    Vec3 v;
+    for (int i = 0; i < 3; ++i) v[i] = at(i).number();
+    return v;
   }
 
   // A point in world coordinates of the design configuration.
   Vec3 point() const {
     if (arraySize() != 3) fail("expected 3 numbers, got " + std::to_string(j_.size()));
-    return Vec3(at(0).coordinate(), at(1).coordinate(), at(2).coordinate());
+    Vec3 v;
+    for (int i = 0; i < 3; ++i) v[i] = at(i).coordinate();
+    return v;
   }
 
   // A unit vector along any non-zero vector; stableNorm scales before it
