@@ -300,6 +300,19 @@ def test_massless_motions_that_something_holds_pack(tmp_path):
     assert result.returncode == 0, result.stderr
 
 
+def test_a_long_chain_is_not_taken_for_massless(tmp_path):
+    """The mass check's pivots of a 1000-link pendulum chain of point masses
+    are 3e-9 of their scale: far from the round-off of a massless motion."""
+    n, length = 1000, 1e-3
+    scene = {"format": "mfbd-scene/1", "name": "chain", "gravity": [0, -9.81, 0],
+             "bodies": [{"name": f"b{i}", "mass": 1e-3, "inertia": [0, 0, 0], "position": [(i + 1) * length, 0, 0]}
+                        for i in range(n)],
+             "joints": [{"name": f"j{i}", "type": "revolute", "parent": f"b{i - 1}" if i else "ground",
+                         "child": f"b{i}", "position": [i * length, 0, 0]} for i in range(n)]}
+    result = pack(scene, tmp_path)
+    assert result.returncode == 0, result.stderr
+
+
 def test_model_description_carries_every_text_exactly(tmp_path):
     """Markup characters, quotes and tab/LF/CR reach the XML's attributes as
     written (a reader would turn literal tabs and line breaks into spaces)."""
