@@ -114,15 +114,14 @@ class Field {
       const auto c = static_cast<unsigned char>(s[i]);
       const bool control = c < 0x20 && c != '\t' && c != '\n' && c != '\r';
       // U+FFFE and U+FFFF are EF BF BE and EF BF BF in UTF-8.
-      const bool nonCharacter = c == 0xEF && i + 2 < s.size() && static_cast<unsigned char>(s[i + 1]) == 0xBF &&
-                                static_cast<unsigned char>(s[i + 2]) >= 0xBE;
-      if (control || nonCharacter) {
-        char code[8];
-        std::snprintf(code, sizeof code, "U+%04X", !nonCharacter ? unsigned(c) : s[i + 2] == '\xBE' ? 0xFFFEu : 0xFFFFu);
-        fail("character " + std::string(code) + " at byte " + std::to_string(i) +
-             " cannot be written to modelDescription.xml (XML 1.0 has no such character); expected "
-             "printable text, tab, line feed or carriage return");
-      }
+      const auto last = i + 2 < s.size() ? static_cast<unsigned char>(s[i + 2]) : 0u;
+      const bool nonCharacter = s.compare(i, 2, "\xEF\xBF") == 0 && (last == 0xBE || last == 0xBF);
+      if (!control && !nonCharacter) continue;
+      char code[8];
+      std::snprintf(code, sizeof code, "U+%04X", control ? unsigned(c) : 0xFFFEu + (last - 0xBEu));
+      fail("character " + std::string(code) + " at byte " + std::to_string(i) +
+           " cannot be written to modelDescription.xml (XML 1.0 has no such character); expected printable "
+           "text, tab, line feed or carriage return");
     }
     return s;
   }
@@ -131,7 +130,7 @@ class Field {
     const std::string s = string();
     bool ok = !s.empty() && (std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_');
     for (char c : s) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_');
-    if (!ok) fail("expected a name of letters, digits and '_' not starting with a digit, got \"" + shortened(s) + "\"");
+    if (!ok) fail("expected a name of letters, digits and '_' not starting with a digit, got \"" + s + "\"");
     return s;
   }
 
@@ -142,19 +141,18 @@ class Field {
 
   // A number or an expression over user parameters: finite, 0 or of a
   // magnitude in [2.2e-308, kLargestNumber].
-  double number() const { return inRange(evaluate(), kLargestNumber); }
+  double number() const { return inRange(evaluate()); }
 
   // A world coordinate of the design configuration or a joint coordinate:
   // the same, within kLargestCoordinate.
-  double coordinate() const { return inRange(evaluate(), kLargestCoordinate); }
+  double coordinate() const { return inRange(evaluate(), kLargestCoordinate, "a coordinate within +-"); }
 
   // `value` if it is in the range every scene number keeps (see
-  // kLargestNumber), with `largest` for its magnitude; else the error.
-  double inRange(double value, double largest = kLargestNumber) const {
+  // kLargestNumber), its magnitude at most `largest`; else the error.
+  double inRange(double value, double largest = kLargestNumber,
+                 const std::string& expected = "a magnitude of at most ") const {
     if (!std::isfinite(value)) fail("expected a finite number, got " + numberText(value));
-    if (std::abs(value) > largest)
-      fail(std::string(largest == kLargestCoordinate ? "expected a coordinate within +-" : "expected a magnitude of at most ") +
-           numberText(largest) + ", got " + numberText(value));
+    if (std::abs(value) > largest) fail("expected " + expected + numberText(largest) + ", got " + numberText(value));
     if (value != 0.0 && std::abs(value) < std::numeric_limits<double>::min())
       fail("expected 0 or a magnitude of at least " + numberText(std::numeric_limits<double>::min()) +
            " (subnormal numbers carry fewer digits), got " + numberText(value));
@@ -230,12 +228,6 @@ class Field {
     const double v = number();
     if (v < 0.0) fail("expected a number >= 0, got " + numberText(v));
     return v;
-  }
-
-  // Long user text shortened for a message.
-  static std::string shortened(const std::string& s) {
-    constexpr std::size_t kShown = 60;
-    return s.size() <= kShown ? s : s.substr(0, kShown) + "...";
   }
 
  private:
