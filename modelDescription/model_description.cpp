@@ -24,6 +24,10 @@ const std::vector<std::pair<std::string, std::string>>& logCategories() {
 
 namespace {
 
+// Text as an XML attribute value. Tab, line feed and carriage return are
+// written as character references, since a reader replaces them by spaces
+// when they stand literally in an attribute. The scene parser has refused
+// the characters XML 1.0 cannot carry (Field::text).
 std::string escape(const std::string& s) {
   std::string out;
   for (char c : s) {
@@ -32,6 +36,10 @@ std::string escape(const std::string& s) {
       case '<': out += "&lt;"; break;
       case '>': out += "&gt;"; break;
       case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      case '\t': out += "&#9;"; break;
+      case '\n': out += "&#10;"; break;
+      case '\r': out += "&#13;"; break;
       default: out += c;
     }
   }

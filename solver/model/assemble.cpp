@@ -5,6 +5,7 @@
 #include <map>
 
 #include "coupling/joint_constraint.hpp"
+#include "model/mass_check.hpp"
 #include "model/model.hpp"
 #include "scene/joint_dofs.hpp"
 
@@ -202,6 +203,7 @@ Model assemble(const Scene& scene) {
     model.constraintCount += 6;
     model.flexibleBodyJoints.push_back(w);
   }
+  checkMassMatrix(scene, model);
   return model;
 }
 

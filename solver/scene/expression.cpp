@@ -2,17 +2,24 @@
 
 #include <algorithm>
 #include <cctype>
-#include <vector>
+#include <charconv>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace mfbd {
 namespace {
 
+// Nesting deeper than this (parentheses, function calls, signs, powers) is
+// refused: each level is a few stack frames of the recursive descent, and
+// 10,000 of them overflowed the stack of the packer and of fmi2Instantiate.
+// No expression a person writes nests 100 deep.
+constexpr int kMaxNesting = 100;
+
 // Recursive descent emitting a postfix program: sum := product (('+'|'-')
 // product)*, product := power (('*'|'/') power)*, power := unary ('^' power)?,
 // unary := '-' unary | primary, primary := number | name | name '(' sum ')' |
-// '(' sum ')'.
+// '(' sum ')'. One pass over the text: the work is linear in its length.
 class Parser {
  public:
   using Op = Expression::Op;
@@ -27,9 +34,23 @@ class Parser {
   }
 
  private:
+  // The message quotes the expression, shortened to its start when long
+  // (a generated sum of 1e6 terms), and says where the error is.
   [[noreturn]] void fail(const std::string& what) const {
-    throw std::invalid_argument("in expression \"" + s_ + "\": " + what);
+    constexpr std::size_t kShown = 60;
+    const std::string shown = s_.size() <= kShown ? s_ : s_.substr(0, kShown) + "...";
+    const std::string where = s_.size() <= kShown ? "" : " at character " + std::to_string(pos_ + 1);
+    throw std::invalid_argument("in expression \"" + shown + "\"" + where + ": " + what);
   }
+  // Counts the nesting of the recursive descent (see kMaxNesting).
+  struct Nesting {
+    explicit Nesting(Parser& p) : p_(p) {
+      if (++p_.depth_ > kMaxNesting)
+        p_.fail("nested deeper than " + std::to_string(kMaxNesting) + " levels (parentheses, calls, signs, '^')");
+    }
+    ~Nesting() { --p_.depth_; }
+    Parser& p_;
+  };
   void emit(Op op, double value = 0.0, double (*function)(double) = nullptr) {
     program_.push_back({op, value, function});
   }
@@ -62,16 +83,26 @@ class Parser {
   }
   void power() {
     unary();
-    if (accept('^')) power(), emit(Op::Power);
+    if (accept('^')) {
+      const Nesting level(*this);
+      power(), emit(Op::Power);
+    }
   }
   void unary() {
-    if (accept('-')) unary(), emit(Op::Negate);
-    else if (accept('+')) unary();
-    else primary();
+    if (accept('-')) {
+      const Nesting level(*this);
+      unary(), emit(Op::Negate);
+    } else if (accept('+')) {
+      const Nesting level(*this);
+      unary();
+    } else {
+      primary();
+    }
   }
   void primary() {
     skipSpace();
     if (accept('(')) {
+      const Nesting level(*this);
       sum();
       if (!accept(')')) fail("missing ')'");
       return;
@@ -82,18 +113,40 @@ class Parser {
     if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') return nameOrCall();
     fail("unexpected '" + std::string(1, c) + "'");
   }
+  // A decimal number, read in place (no copy of the rest of the text) and
+  // whatever the C locale says about decimal points. Subnormal numbers read
+  // as they are and a number below them as 0, as the JSON reader does (so
+  // "1e-320" and 1e-320 give one value; Field::number judges it).
   void number() {
-    std::size_t used = 0;
+    const char* begin = s_.data() + pos_;
+    const char* end = s_.data() + s_.size();
     double value = 0.0;
-    try {
-      value = std::stod(s_.substr(pos_), &used);
-    } catch (const std::out_of_range&) {
-      fail("number out of range");
-    } catch (const std::exception&) {
-      fail("bad number");
+    const auto [stop, error] = std::from_chars(begin, end, value);
+    if (error == std::errc::invalid_argument) fail("bad number");
+    if (error == std::errc::result_out_of_range) {
+      if (!belowSubnormals(begin, stop)) fail("number out of range (beyond 1.8e308)");
+      value = 0.0;
     }
-    pos_ += used;
+    pos_ += std::size_t(stop - begin);
+    if (pos_ < s_.size() && (std::isalnum(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '_' || s_[pos_] == '.'))
+      fail("bad number");
     emit(Op::Number, value);
+  }
+  // Out of range and below 1 in magnitude (so below the subnormals): the
+  // decimal exponent of the first significant digit is negative.
+  static bool belowSubnormals(const char* begin, const char* end) {
+    long integerDigits = 0, leadingZeros = 0;  // significant digits before '.', zeros after it
+    bool point = false, significant = false;
+    const char* p = begin;
+    for (; p < end && *p != 'e' && *p != 'E'; ++p) {
+      if (*p == '.') point = true;
+      else if (*p != '0' || significant) significant = true, integerDigits += !point;
+      else if (point) ++leadingZeros;
+    }
+    long exponent = 0;
+    if (p < end && std::from_chars(p + 1 + (p[1] == '+'), end, exponent).ec == std::errc::result_out_of_range)
+      return p[1] == '-';  // an exponent beyond 19 digits
+    return (integerDigits > 0 ? integerDigits - 1 : -leadingZeros - 1) + exponent < 0;
   }
   void nameOrCall() {
     const std::size_t start = pos_;
@@ -101,6 +154,7 @@ class Parser {
       ++pos_;
     const std::string name = s_.substr(start, pos_ - start);
     if (accept('(')) {
+      const Nesting level(*this);
       std::size_t n = 1;
       sum();
       while (accept(',')) sum(), ++n;
@@ -142,6 +196,7 @@ class Parser {
   const std::string& variable_;
   std::vector<Expression::Instruction>& program_;
   std::size_t pos_ = 0;
+  int depth_ = 0;
 };
 
 }  // namespace

@@ -13,4 +13,12 @@ inline std::string numberText(double x) {
   return std::string(text, end);
 }
 
+// A vector (anything with size() and operator[]) as "[1, 0.5, 1e-300]".
+template <class Vector>
+std::string vectorText(const Vector& v) {
+  std::string out = "[";
+  for (decltype(v.size()) i = 0; i < v.size(); ++i) out += (i ? ", " : "") + numberText(v[i]);
+  return out + "]";
+}
+
 }  // namespace mfbd

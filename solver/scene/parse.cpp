@@ -6,7 +6,6 @@
 
 #include <cmath>
 #include <set>
-#include <sstream>
 
 #include "scene/expression.hpp"
 #include "scene/json_field.hpp"
@@ -33,6 +32,13 @@ const char* jointTypeName(JointType type) {
 
 namespace {
 
+// The scene's name is the FMU's modelIdentifier: a C identifier (what
+// Field::identifier accepts) that names the binary in the archive,
+// binaries/<platform>/<name>.so or .dll. Importers extract into a
+// temporary folder, and a path on Windows holds 260 characters by default
+// (a file name 255 anywhere): 64 leaves room for the folder.
+constexpr std::size_t kLongestSceneName = 64;
+
 std::vector<ParameterSpec> parseParameters(const Field& f, const std::map<std::string, double>& overrides,
                                            std::map<std::string, double>& values) {
   std::vector<ParameterSpec> out;
@@ -45,13 +51,13 @@ std::vector<ParameterSpec> parseParameters(const Field& f, const std::map<std::s
     if (p.raw().is_object()) {
       p.expectObject({"value", "unit", "description"}, {"value"});
       spec.value = Field(p.raw().at("value"), p.path() + ".value", none).number();
-      if (p.has("unit")) spec.unit = p.at("unit").string();
-      if (p.has("description")) spec.description = p.at("description").string();
+      if (p.has("unit")) spec.unit = p.at("unit").text();
+      if (p.has("description")) spec.description = p.at("description").text();
     } else {
       spec.value = Field(p.raw(), p.path(), none).number();
     }
     if (const auto it = overrides.find(spec.name); it != overrides.end()) {
-      if (!std::isfinite(it->second)) p.fail("expected a finite value, got " + std::to_string(it->second));
+      p.inRange(it->second);
       spec.value = it->second;
     }
     values[spec.name] = spec.value;
@@ -71,9 +77,10 @@ Mat3 parseOrientation(const Field& f) {
     const Field q = f.at("quaternion");
     const std::vector<double> v = q.numbers();
     if (v.size() != 4) q.fail("expected 4 numbers [w, x, y, z], got " + std::to_string(v.size()));
-    Quat quat(v[0], v[1], v[2], v[3]);
-    if (quat.norm() < 1e-12) q.fail("expected a non-zero quaternion");
-    return quat.normalized().toRotationMatrix();
+    const Eigen::Vector4d wxyz(v[0], v[1], v[2], v[3]);
+    const double norm = wxyz.stableNorm();  // no overflow for [1e20, 0, 0, 0]
+    if (norm == 0.0) q.fail("expected a non-zero quaternion");
+    return Quat(v[0] / norm, v[1] / norm, v[2] / norm, v[3] / norm).toRotationMatrix();
   }
   if (f.has("rotation_vector")) return expSO3(f.at("rotation_vector").vec3());
   const Vec3 z = f.at("z_axis").direction();
@@ -103,19 +110,12 @@ Mat3 parseInertia(const Field& f) {
   const Eigen::SelfAdjointEigenSolver<Mat3> eig(J);
   const Vec3 p = eig.eigenvalues();
   const double scale = std::max(1.0, p.cwiseAbs().maxCoeff());
-  if (p.minCoeff() < -1e-12 * scale) {
-    std::ostringstream s;
-    s << "expected an inertia tensor with principal moments >= 0, got " << p.transpose();
-    f.fail(s.str());
-  }
-  for (int i = 0; i < 3; ++i) {
-    if (p[i] > p[(i + 1) % 3] + p[(i + 2) % 3] + 1e-12 * scale) {
-      std::ostringstream s;
-      s << "principal moments " << p.transpose()
-        << " break the triangle inequality (each must be <= the sum of the other two)";
-      f.fail(s.str());
-    }
-  }
+  if (p.minCoeff() < -1e-12 * scale)
+    f.fail("expected an inertia tensor with principal moments >= 0, got " + vectorText(p));
+  for (int i = 0; i < 3; ++i)
+    if (p[i] > p[(i + 1) % 3] + p[(i + 2) % 3] + 1e-12 * scale)
+      f.fail("principal moments " + vectorText(p) +
+             " break the triangle inequality (each must be <= the sum of the other two)");
   return J;
 }
 
@@ -136,8 +136,8 @@ BodySpec parseBody(const Field& f) {
   b.name = f.at("name").identifier();
   b.mass = f.at("mass").nonNegative();  // 0: a massless body, its motion fixed by joints
   b.inertia = parseInertia(f.at("inertia"));
-  if (f.has("center_of_mass")) b.centerOfMass = f.at("center_of_mass").vec3();
-  b.position = f.at("position").vec3();
+  if (f.has("center_of_mass")) b.centerOfMass = f.at("center_of_mass").point();
+  b.position = f.at("position").point();
   if (f.has("orientation")) b.orientation = parseOrientation(f.at("orientation"));
   return b;
 }
@@ -162,7 +162,7 @@ JointSpec parseJoint(const Field& f) {
   parseEnd(f.at("child"), jt.child, jt.childNode);
   // On a flexible node the joint may sit at the node (the default there).
   jt.positionGiven = f.has("position");
-  if (jt.positionGiven) jt.position = f.at("position").vec3();
+  if (jt.positionGiven) jt.position = f.at("position").point();
   else if (!jt.parentNode && !jt.childNode)
     throw SceneError(f.path() + ".position", "missing required field");
   if (f.has("axis")) jt.axis = f.at("axis").direction();
@@ -176,12 +176,15 @@ JointSpec parseJoint(const Field& f) {
     if (!jt.driveRateInput) f.at("drive").at("rate_input").fail("expected true (or give the drive as an expression of t)");
   } else if (f.has("drive")) {  // a function of t: an expression or a table
     jt.driven = true;
-    jt.drive = f.at("drive").timeFunction("coordinate");
+    jt.drive = f.at("drive").timeFunction("coordinate", true);
   }
   if (f.has("initial")) {
     const Field init = f.at("initial");
     init.expectObject({"coordinates", "rates"}, {});
-    if (init.has("coordinates")) jt.initialCoordinates = init.at("coordinates").numbers();
+    if (init.has("coordinates")) {
+      const Field q = init.at("coordinates");
+      for (std::size_t i = 0; i < q.arraySize(); ++i) jt.initialCoordinates.push_back(q.at(i).coordinate());
+    }
     if (init.has("rates")) jt.initialRates = init.at("rates").numbers();
   }
   return jt;
@@ -199,10 +202,7 @@ SolverOptions parseSolver(const Field& f) {
     if (s.rhoInf < 0.0 || s.rhoInf > 1.0) f.at("rho_inf").fail("expected a spectral radius in [0, 1]");
   }
   if (f.has("tolerance")) s.tolerance = f.at("tolerance").positive();
-  if (f.has("max_iterations")) {
-    s.maxIterations = f.at("max_iterations").integer();
-    if (s.maxIterations < 1 || s.maxIterations > 100) f.at("max_iterations").fail("expected 1 to 100");
-  }
+  if (f.has("max_iterations")) s.maxIterations = f.at("max_iterations").integer(1, 100);
   if (f.has("initial_equilibrium")) s.initialEquilibrium = f.at("initial_equilibrium").boolean();
   if (f.has("newton_matrix")) {
     const std::string form = f.at("newton_matrix").string();
@@ -261,7 +261,11 @@ Scene parseScene(const std::string& text, const std::map<std::string, double>& p
 
   Scene scene;
   scene.name = root.at("name").identifier();
-  if (root.has("description")) scene.description = root.at("description").string();
+  if (scene.name.size() > kLongestSceneName)
+    root.at("name").fail("expected at most " + std::to_string(kLongestSceneName) +
+                         " characters (the FMU's modelIdentifier names its binary file), got " +
+                         std::to_string(scene.name.size()));
+  if (root.has("description")) scene.description = root.at("description").text();
   if (root.has("parameters")) scene.parameters = parseParameters(root.at("parameters"), parameterValues, params);
   else if (!parameterValues.empty())
     throw SceneError("parameters." + parameterValues.begin()->first, "no such parameter in the scene");

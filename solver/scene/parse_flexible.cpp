@@ -63,12 +63,7 @@ BeamSection parseSection(const Field& f, const Field* material) {
   f.at("shape").fail("unknown shape \"" + shape + "\"; expected rectangle, circle or tube");
 }
 
-int parseNode(const Field& f, int nodeCount) {
-  const int n = f.integer();
-  if (n < 0 || n >= nodeCount)
-    f.fail("expected a node index in 0.." + std::to_string(nodeCount - 1) + ", got " + std::to_string(n));
-  return n;
-}
+int parseNode(const Field& f, int nodeCount) { return f.integer(0, nodeCount - 1, "a node index"); }
 
 SupportSpec parseSupport(const Field& f, int nodeCount) {
   f.expectObject({"node", "type", "direction", "axis", "angle", "rate_input"}, {"node", "type"});
@@ -90,7 +85,7 @@ SupportSpec parseSupport(const Field& f, int nodeCount) {
     if (f.has("rate_input")) s.rateInput = f.at("rate_input").boolean();
     if (f.has("angle") == s.rateInput)
       f.fail("a driven support takes exactly one of \"angle\" (a function of t) or \"rate_input\": true");
-    if (f.has("angle")) s.angle = f.at("angle").timeFunction("angle");
+    if (f.has("angle")) s.angle = f.at("angle").timeFunction("angle", true);
   } else {
     f.at("type").fail("unknown support \"" + kind + "\"; expected clamp, pin, slide or driven");
   }
@@ -122,7 +117,7 @@ NodalLoadSpec parseLoad(const Field& f, int nodeCount) {
   if (f.has("force")) l.force = f.at("force").vec3();
   if (f.has("moment")) l.moment = f.at("moment").vec3();
   if (f.has("follower")) l.follower = f.at("follower").boolean();
-  if (f.has("scale")) l.scale = f.at("scale").timeFunction("scale");
+  if (f.has("scale")) l.scale = f.at("scale").timeFunction("scale", false);
   return l;
 }
 
@@ -130,9 +125,8 @@ NodalLoadSpec parseLoad(const Field& f, int nodeCount) {
 // y along the section axis.
 void parseBeamLine(const Field& f, FlexibleBodySpec& b) {
   f.expectObject({"start", "end", "elements", "section_y"}, {"start", "end", "elements"});
-  const Vec3 start = f.at("start").vec3(), end = f.at("end").vec3();
-  const int n = f.at("elements").integer();
-  if (n < 1 || n > 1000000) f.at("elements").fail("expected 1 to 1000000 elements");
+  const Vec3 start = f.at("start").point(), end = f.at("end").point();
+  const int n = f.at("elements").integer(1, 1000000, "an element count");
   if ((end - start).norm() < 1e-12) f.at("end").fail("expected an end point away from start");
   if (f.has("section_y")) b.sectionY = f.at("section_y").direction();
   const Vec3 x = (end - start).normalized();
@@ -150,7 +144,7 @@ void parseBeamLine(const Field& f, FlexibleBodySpec& b) {
 void parseMesh(const Field& f, FlexibleBodySpec& b) {
   const Field nodes = f.at("nodes");
   for (std::size_t i = 0; i < nodes.arraySize(); ++i) {
-    b.nodes.push_back(nodes.at(i).vec3());
+    b.nodes.push_back(nodes.at(i).point());
     b.nodeOrientations.push_back(Mat3::Identity());
   }
   const Field elements = f.at("elements");

@@ -29,9 +29,9 @@ ForceSpec parseForce(const Field& f) {
                    {"name", "body1", "point1", "body2", "point2"});
     s.kind = ForceSpec::Kind::SpringDamper;
     parseEnd(f.at("body1"), s.body1, s.node1);
-    s.point1 = f.at("point1").vec3();
+    s.point1 = f.at("point1").point();
     parseEnd(f.at("body2"), s.body2, s.node2);
-    s.point2 = f.at("point2").vec3();
+    s.point2 = f.at("point2").point();
     if (f.has("free_length")) s.freeLength = f.at("free_length").nonNegative();
     if (f.has("actuated")) s.actuated = f.at("actuated").boolean();
   } else if (type == "bushing") {
@@ -40,7 +40,7 @@ ForceSpec parseForce(const Field& f) {
     s.kind = ForceSpec::Kind::Bushing;
     parseEnd(f.at("body1"), s.body1, s.node1);
     parseEnd(f.at("body2"), s.body2, s.node2);
-    s.point1 = s.point2 = f.at("position").vec3();
+    s.point1 = s.point2 = f.at("position").point();
     if (f.has("orientation")) {
       const Field o = f.at("orientation");
       o.expectObject({"z_axis", "x_axis"}, {"z_axis"});
@@ -52,7 +52,7 @@ ForceSpec parseForce(const Field& f) {
     f.expectObject({"name", "type", "body", "point", "frame"}, {"name", "body", "point"});
     s.kind = ForceSpec::Kind::AppliedForce;
     parseEnd(f.at("body"), s.body1, s.node1);
-    s.point1 = f.at("point").vec3();
+    s.point1 = f.at("point").point();
     if (f.has("frame")) {
       const std::string frame = f.at("frame").string();
       if (frame != "world" && frame != "body") f.at("frame").fail("expected \"world\" or \"body\"");
@@ -62,7 +62,7 @@ ForceSpec parseForce(const Field& f) {
     f.expectObject({"name", "type", "joint", "stiffness", "damping", "free_angle"}, {"name", "joint"});
     s.kind = ForceSpec::Kind::RotationalSpringDamper;
     s.joint = f.at("joint").identifier();
-    if (f.has("free_angle")) s.freeLength = f.at("free_angle").number();
+    if (f.has("free_angle")) s.freeLength = f.at("free_angle").coordinate();
     else s.freeLength = 0.0;
   } else {
     f.at("type").fail("unknown force type \"" + type +

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "scene/number_text.hpp"
+
 namespace mfbd {
 
 TimeFunction::TimeFunction(const std::string& expression, const std::map<std::string, double>& parameters)
@@ -25,7 +27,7 @@ TimeFunction TimeFunction::table(const std::vector<double>& times, const std::ve
       throw std::invalid_argument("point " + std::to_string(i) + ": expected finite numbers");
     if (i > 0 && !(times[i] > times[i - 1]))
       throw std::invalid_argument("point " + std::to_string(i) + ": expected times increasing, got " +
-                                  std::to_string(times[i]) + " after " + std::to_string(times[i - 1]));
+                                  numberText(times[i]) + " after " + numberText(times[i - 1]));
   }
   std::vector<double> h(n - 1), d(n - 1), diagonal(n), upper(n), rhs(n);
   for (std::size_t i = 0; i + 1 < n; ++i) {

@@ -20,7 +20,10 @@ def test_examples_are_valid(scene):
 
 # Errors the schema can express (others need the parser: names, tree, physics).
 STRUCTURAL = ["not an object", "unknown top-level key", "unknown body key", "missing field", "wrong type",
-              "unknown joint type", "wrong vector length", "wrong format"]
+              "unknown joint type", "wrong vector length", "wrong format", "parameter beyond 1e20", "body at 1e308",
+              "axis whose length overflows", "element count beyond 32 bits", "iterations beyond 32 bits",
+              "fractional integer", "control character in the description", "NUL in a parameter description",
+              "non-character in a unit", "scene name too long"]
 
 
 @pytest.mark.parametrize("case", STRUCTURAL)
