@@ -1,6 +1,7 @@
 #include "simulation.hpp"
 
 #include <algorithm>
+#include <limits>
 
 #include "coupling/joint_constraint.hpp"
 #include "flex/flexible_energy.hpp"
@@ -10,6 +11,7 @@
 #include "integrator/static_equilibrium.hpp"
 #include "rigid/force_elements.hpp"
 #include "rigid/recursive_dynamics.hpp"
+#include "scene/number_text.hpp"
 
 namespace mfbd {
 
@@ -149,14 +151,22 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
   };
   const Configuration start = state_.q;
   VectorXd phi = constraints(state_.q, state_.t);
-  for (int k = 0; k < 50 && phi.cwiseAbs().maxCoeff() > tol; ++k) {
+  // The rows are met to the tolerance or to their round-off (a few ulps of
+  // the positions they are computed from), whichever is larger, as in a
+  // substep: a tolerance below round-off cannot be met.
+  auto met = [&] {
+    const double phiFloor = 64.0 * std::numeric_limits<double>::epsilon() * system_.constraintLengthScale();
+    return phi.cwiseAbs().maxCoeff() <= std::max(tol, phiFloor);
+  };
+  for (int k = 0; k < 50 && !met(); ++k) {
     system_.retract(state_.q, -leastChange(jacobian(state_.q, state_.v), phi));
     phi = constraints(state_.q, state_.t);
   }
   int worst;
-  if (phi.cwiseAbs().maxCoeff(&worst) > tol) {
+  if (!met()) {
+    phi.cwiseAbs().maxCoeff(&worst);
     message = "cannot assemble the mechanism: " + constraintOwner(worst) + " is violated by " +
-              std::to_string(std::abs(phi[worst])) + " after projection (is the loop closable?)";
+              numberText(std::abs(phi[worst])) + " after projection (is the loop closable?)";
     return false;
   }
   const Eigen::MatrixXd J = jacobian(state_.q, state_.v);
@@ -169,8 +179,8 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
                                .cwiseAbs().maxCoeff();
       const double rate = dv.segment(j.velocityOffset, j.dofs).cwiseAbs().maxCoeff();
       if (moved > tol || rate > tol)
-        notes->push_back("assembly moved joint '" + j.name + "' by " + std::to_string(moved) +
-                         " and its rate by " + std::to_string(rate));
+        notes->push_back("assembly moved joint '" + j.name + "' by " + numberText(moved) +
+                         " and its rate by " + numberText(rate));
     }
   }
   return true;

@@ -1,5 +1,6 @@
 """Closed loops: cut joints with Lagrange multipliers, checked against a hand
 Newton-Euler solution, constraint drift and energy."""
+import re
 import sys
 
 import numpy as np
@@ -153,6 +154,36 @@ def test_impossible_assembly_is_an_error_naming_the_loop(tmp_path):
         assert s.call("enterInitializationMode") == ERROR
         assert "cannot assemble the mechanism" in s.messages()
         assert "cut joint 'C'" in s.messages() or "drive of joint 'D'" in s.messages()
+    finally:
+        s.free()
+
+
+def test_assembly_at_a_tolerance_below_round_off_meets_the_round_off():
+    # solver.tolerance = 1e-16 is below the constraints' round-off (a few
+    # ulps of 3 m): the assembly stops there, as a substep does, and the
+    # run goes on at that tolerance.
+    s = Slave(FMUS / "four_bar.fmu", instance_name="tight").start({"solver.tolerance": 1e-16})
+    try:
+        p = {b: np.array(s.get(f"{b}.position.x", f"{b}.position.y")) for b in LENGTHS}
+        B, C = 2 * p["crank"] - A, 2 * p["rocker"] - D
+        assert abs(np.linalg.norm(C - B) - 3.0) < 1e-13
+        for k in range(10):
+            assert s.step(0.01 * k, 0.01) == OK, s.messages()
+    finally:
+        s.free()
+
+
+def test_impossible_assembly_names_the_violation_as_a_number(tmp_path):
+    scene = load_scene("four_bar")
+    scene["joints"][2]["drive"] = "1.5"
+    s = Slave(packed(scene, tmp_path), instance_name="impossible")
+    try:
+        assert s.instantiate()
+        s.call("setupExperiment", None, 0.0, None)
+        assert s.call("enterInitializationMode") == ERROR
+        violation = re.search(r"violated by (\S+) after projection", s.messages())
+        assert violation and float(violation.group(1)) > 0.1, s.messages()
+        assert not re.search(r"\d\.\d{6}\b", violation.group(1))  # not fixed-point %f
     finally:
         s.free()
 
