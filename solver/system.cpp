@@ -420,6 +420,13 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
 // consistent inertia with their tangents, 5.9 us, against 0.37 us:
 // benchmarks/flexible_phases.cpp), so a mesh's tangent about 16 of the
 // mesh's residuals. The larger part is taken for the whole.
+bool System::elasticCoordinates() const {
+  if (!model_.flexible.nodes.empty() || !model_.forces.empty()) return true;
+  for (const Joint& j : model_.joints)
+    if (j.springStiffness != 0.0) return true;
+  return false;
+}
+
 double System::tangentCost() const {
   double rigid = 0.0;
   if (!model_.bodies.empty()) rigid = recursiveMatrix_ ? 3.0 : double(tangentColours_.size() + 1);

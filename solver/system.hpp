@@ -54,6 +54,7 @@ class System : public Dynamics {
   void constraintJacobian(double t, const Configuration& q, const VectorXd& v, Triplets& jacobian);
   double constraintLengthScale() const override { return constraintLengthScale_; }
   double tangentCost() const override;
+  bool elasticCoordinates() const override;
   void turnWithRotations(const Configuration& from, const Configuration& to, VectorXd& x,
                          bool transpose) const override;
   void turnOverStep(const Configuration& q, const VectorXd& v, double h, VectorXd& x) const override;
