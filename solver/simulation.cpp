@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include <Eigen/QR>
+
 #include "coupling/joint_constraint.hpp"
 #include "flex/flexible_energy.hpp"
 #include "integrator/constraint_rank.hpp"
@@ -314,8 +316,30 @@ void Simulation::evaluateOutputs(bool reactions) {
       lambda = probe.lambda;
     }
   }
+  if (consistentSolve && system_.constraintCount() > 0) minimumNormMultipliers(vdot, lambda);
   system_.evaluate(state_.t, state_.q, state_.v, vdot, lambda);
   outputLambda_ = lambda;
+}
+
+// Redundant constraints (Bricard) leave the multipliers free along the
+// null space of Phi_q^T: the generalized constraint force f = Phi_q^T
+// lambda is unique, its split over the rows is whatever round-off picked
+// (reaction torques 1.6 % of their range apart between a step H and
+// nextafter(H)). The outputs take the minimum-norm lambda with that f, by
+// a complete orthogonal decomposition of Phi_q^T; f is taken from the
+// equations of motion, f = Q - M vdot (the residual with lambda = 0).
+// Singular values below 1e-10 of the largest count as zero: a row that is
+// a combination of others to round-off.
+void Simulation::minimumNormMultipliers(const VectorXd& vdot, VectorXd& lambda) {
+  const int n = system_.velocityCount(), m = system_.constraintCount();
+  VectorXd r, phi;
+  system_.residual(state_.t, state_.q, state_.v, vdot, VectorXd::Zero(m), r, phi);
+  const Eigen::MatrixXd Jt = constraintJacobian(state_.q, state_.v).transpose();
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod;
+  cod.setThreshold(1e-10);
+  cod.compute(Jt);
+  const VectorXd minimum = cod.solve(VectorXd(-r));
+  if (minimum.allFinite() && n > 0) lambda = minimum;
 }
 
 double Simulation::read(const Quantity& q) {

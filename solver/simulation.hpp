@@ -84,6 +84,7 @@ class Simulation {
   // present state, and the outputs of that state.
   bool startIntegrator(std::string& message);
   void evaluateOutputs(bool reactions);
+  void minimumNormMultipliers(const VectorXd& vdot, VectorXd& lambda);
 
   void updateQuaternions(bool reset);
   double quaternion(std::size_t i, const Mat3& A, int component) const;

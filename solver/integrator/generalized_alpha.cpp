@@ -251,7 +251,14 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     const bool belowFloor = size <= floor && (elasticCoordinates_ || (k > 0 && previous <= floor));
     const double remaining = k > 0 && rho < 1.0 ? rho / (1.0 - rho) * size : HUGE_VAL;
     const double resolved = elasticCoordinates_ ? std::max(target, options_.tolerance) : target;
-    const bool small = remaining <= resolved || size <= 0.01 * target || belowFloor;
+    // A fresh matrix's corrections that stop contracting below a looser
+    // floor (the coordinates' ulps, 16 times the constraint noise) are
+    // noise too: the noise estimate is only an estimate (Bricard's
+    // corrections hover at 2-4e-16 against an estimated 2e-16).
+    const bool noise = k > 0 && withFreshMatrix >= 1 && rho > 0.5 &&
+                       size <= std::max(256.0 * epsilon * std::max(1.0, s.q.scalars.size() ? s.q.scalars.cwiseAbs().maxCoeff() : 0.0),
+                                        16.0 * correctionNoise_);
+    const bool small = remaining <= resolved || size <= 0.01 * target || belowFloor || noise;
     if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= std::max(options_.tolerance, phiFloor))) {
       lastIterations_ = k + 1;
       substepsSinceFactorization_ += 1.0;
