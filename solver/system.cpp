@@ -372,6 +372,19 @@ void System::constraintJacobian(double t, const Configuration& q, const VectorXd
   constraintRows(false, jacobian);
 }
 
+VectorXd System::velocityConstraints(double t, const Configuration& q, const VectorXd& v) {
+  const int n = model_.velocityCount, m = model_.constraintCount;
+  VectorXd r, before, after;
+  const double dt = 1e-6 * std::max(1.0, std::abs(t));
+  residual(t + dt, q, v, VectorXd::Zero(n), VectorXd::Zero(m), r, after);
+  residual(t - dt, q, v, VectorXd::Zero(n), VectorXd::Zero(m), r, before);
+  VectorXd violation = (after - before) / (2.0 * dt);
+  Triplets jacobian;
+  constraintJacobian(t, q, v, jacobian);
+  for (const auto& e : jacobian) violation[e.row()] += e.value() * v[e.col()];
+  return violation;
+}
+
 int System::auxiliaryCount(double cM) const {
   return recursiveMatrix_ && cM != 0.0 ? 18 * int(model_.bodies.size()) : 0;
 }

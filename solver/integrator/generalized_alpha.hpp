@@ -63,6 +63,7 @@ class GeneralizedAlpha : public TimeStepper {
   };
   MatrixFactors matrixFactors(double h) const;
   double constraintNoise(const Dynamics& system, int n, int m, int size) const;
+  void projectVelocities(Dynamics& system, IntegratorState& trial, double gammaPrime);
 
   double alphaM_, alphaF_, gamma_, beta_;
   LinearSolver solver_;
