@@ -188,9 +188,60 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
   return true;
 }
 
+// A joint's initial coordinates move the links after it; a flexible body
+// that hangs from such a link (welded to a virtual body the tree carries)
+// moves with it, rigidly: nodes turned and shifted as the virtual body
+// is, their velocities those of points of it. Without that the body
+// starts stretched between its design place and the moved link (a rod
+// under a link raised by 0.6 rad: 2.4e6 J of strain energy). Bodies with
+// supports stay where the scene puts them; a flexible body moves with the
+// first such link it hangs from.
+void Simulation::carryFlexibleBodies() {
+  const Model& model = system_.model();
+  const FlexibleMesh& mesh = model.flexible;
+  if (mesh.bodies.empty() || model.flexibleBodyJoints.empty()) return;
+  const int n = system_.velocityCount();
+  Configuration design = state_.q;
+  for (const Joint& j : model.joints) {
+    if (j.cut || j.dofs == 0 || j.scalarOffset < 0) continue;
+    design.scalars.segment(j.scalarOffset, j.rotation >= 0 ? j.dofs - 3 : j.dofs).setZero();
+    if (j.rotation >= 0) design.rotations[j.rotation] = Mat3::Identity();
+  }
+  system_.evaluateKinematics(state_.t, design, VectorXd::Zero(n), VectorXd::Zero(n));
+  const std::vector<BodyKinematics> before = system_.data().body;
+  system_.evaluateKinematics(state_.t, state_.q, state_.v, VectorXd::Zero(n));
+  const std::vector<BodyKinematics> after = system_.data().body;
+  std::vector<bool> carried(mesh.bodies.size(), false);
+  for (const FlexibleBodyJoint& w : model.flexibleBodyJoints) {
+    const int v = w.virtualBody;
+    const Joint& inboard = model.joints[model.bodies[v].inboardJoint];
+    if (inboard.type == JointType::Free && inboard.parentMarker.body == kGroundIndex) continue;  // held by its weld
+    std::size_t f = 0;
+    while (w.node >= mesh.bodies[f].firstNode + mesh.bodies[f].nodeCount) ++f;
+    const FlexibleBody& body = mesh.bodies[f];
+    bool free = true;
+    for (int i = body.firstNode; i < body.firstNode + body.nodeCount; ++i) free = free && mesh.nodes[i].free;
+    if (carried[f] || !free) continue;
+    carried[f] = true;
+    const Mat3 R = after[v].orientation * before[v].orientation.transpose();
+    const Vec3 shift = after[v].position - R * before[v].position;
+    for (int i = body.firstNode; i < body.firstNode + body.nodeCount; ++i) {
+      const FlexNode& node = mesh.nodes[i];
+      auto displacement = state_.q.scalars.segment<3>(node.scalarOffset);
+      Mat3& A = state_.q.rotations[node.rotation];
+      const Vec3 r = R * (node.reference.r + displacement) + shift;
+      displacement = r - node.reference.r;
+      A = R * A;
+      state_.v.segment<3>(node.dof[0]) = after[v].velocity + after[v].angularVelocity.cross(r - after[v].position);
+      state_.v.segment<3>(node.dof[3]) = A.transpose() * after[v].angularVelocity;
+    }
+  }
+}
+
 bool Simulation::initialize(double t0, std::string& message, std::vector<std::string>* notes) {
   state_.t = t0;
   system_.startDrives(t0);
+  carryFlexibleBodies();
   if (!assembleConstraints(message, notes)) return false;
   if (notes && system_.constraintCount() > 0) {
     const std::string redundant = redundantConstraints(state_.q, state_.v, true);
