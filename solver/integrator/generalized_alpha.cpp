@@ -269,7 +269,13 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     // makes force noise of the tolerance's order: one correction below the
     // floor, or an error left below the tolerance in q, is converged there.
     const bool belowFloor = size <= floor && (elasticCoordinates_ || (k > 0 && previous <= floor));
-    const double remaining = k > 0 && rho < 1.0 ? rho / (1.0 - rho) * size : HUGE_VAL;
+    // Before a second correction, the rate this matrix showed in the
+    // previous substep stands in for it (a loose tolerance then stops at
+    // the first correction every other substep; the rate is never older
+    // than one substep, as a kept matrix ages). Elastic systems keep the
+    // old rule, never at the first correction.
+    const double rate = k > 0 ? rho : withFreshMatrix < 0 && !elasticCoordinates_ ? lastRate_ : 1.0;
+    const double remaining = rate < 1.0 ? rate / (1.0 - rate) * size : HUGE_VAL;
     const double resolved = elasticCoordinates_ ? std::max(target, options_.tolerance) : target;
     // A fresh matrix's corrections that stop contracting below a looser
     // floor (the coordinates' ulps, 16 times the constraint noise) are
@@ -280,6 +286,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
                                         16.0 * correctionNoise_);
     const bool small = remaining <= resolved || size <= 0.01 * target || belowFloor || noise;
     if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= std::max(options_.tolerance, phiFloor))) {
+      lastRate_ = k > 0 ? rho : 1.0;
       lastIterations_ = k + 1;
       substepsSinceFactorization_ += 1.0;
       trial.substeps = s.substeps + 1;

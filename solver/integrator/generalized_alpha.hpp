@@ -84,6 +84,7 @@ class GeneralizedAlpha : public TimeStepper {
   double lastIterations_ = 1e9;  // Newton iterations of the last accepted substep (none yet: many)
   double substepsSinceFactorization_ = 0.0;  // accepted since the current factorization
   double firstRate_ = 0.0;
+  double lastRate_ = 1.0;  // contraction at the last check of the previous substep (1: unknown)
   double keptRate_ = 1.0;  // contraction of the current factorization at its last check (1: not yet known)  // contraction at the first check of the last substep with a kept matrix
 };
 
