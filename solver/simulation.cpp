@@ -1,6 +1,9 @@
 #include "simulation.hpp"
 
 #include <algorithm>
+#include <limits>
+
+#include <Eigen/QR>
 
 #include "coupling/joint_constraint.hpp"
 #include "flex/flexible_energy.hpp"
@@ -10,6 +13,7 @@
 #include "integrator/static_equilibrium.hpp"
 #include "rigid/force_elements.hpp"
 #include "rigid/recursive_dynamics.hpp"
+#include "scene/number_text.hpp"
 
 namespace mfbd {
 
@@ -149,14 +153,22 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
   };
   const Configuration start = state_.q;
   VectorXd phi = constraints(state_.q, state_.t);
-  for (int k = 0; k < 50 && phi.cwiseAbs().maxCoeff() > tol; ++k) {
+  // The rows are met to the tolerance or to their round-off (a few ulps of
+  // the positions they are computed from), whichever is larger, as in a
+  // substep: a tolerance below round-off cannot be met.
+  auto met = [&] {
+    const double phiFloor = 64.0 * std::numeric_limits<double>::epsilon() * system_.constraintLengthScale();
+    return phi.cwiseAbs().maxCoeff() <= std::max(tol, phiFloor);
+  };
+  for (int k = 0; k < 50 && !met(); ++k) {
     system_.retract(state_.q, -leastChange(jacobian(state_.q, state_.v), phi));
     phi = constraints(state_.q, state_.t);
   }
   int worst;
-  if (phi.cwiseAbs().maxCoeff(&worst) > tol) {
+  if (!met()) {
+    phi.cwiseAbs().maxCoeff(&worst);
     message = "cannot assemble the mechanism: " + constraintOwner(worst) + " is violated by " +
-              std::to_string(std::abs(phi[worst])) + " after projection (is the loop closable?)";
+              numberText(std::abs(phi[worst])) + " after projection (is the loop closable?)";
     return false;
   }
   const Eigen::MatrixXd J = jacobian(state_.q, state_.v);
@@ -169,16 +181,67 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
                                .cwiseAbs().maxCoeff();
       const double rate = dv.segment(j.velocityOffset, j.dofs).cwiseAbs().maxCoeff();
       if (moved > tol || rate > tol)
-        notes->push_back("assembly moved joint '" + j.name + "' by " + std::to_string(moved) +
-                         " and its rate by " + std::to_string(rate));
+        notes->push_back("assembly moved joint '" + j.name + "' by " + numberText(moved) +
+                         " and its rate by " + numberText(rate));
     }
   }
   return true;
 }
 
+// A joint's initial coordinates move the links after it; a flexible body
+// that hangs from such a link (welded to a virtual body the tree carries)
+// moves with it, rigidly: nodes turned and shifted as the virtual body
+// is, their velocities those of points of it. Without that the body
+// starts stretched between its design place and the moved link (a rod
+// under a link raised by 0.6 rad: 2.4e6 J of strain energy). Bodies with
+// supports stay where the scene puts them; a flexible body moves with the
+// first such link it hangs from.
+void Simulation::carryFlexibleBodies() {
+  const Model& model = system_.model();
+  const FlexibleMesh& mesh = model.flexible;
+  if (mesh.bodies.empty() || model.flexibleBodyJoints.empty()) return;
+  const int n = system_.velocityCount();
+  Configuration design = state_.q;
+  for (const Joint& j : model.joints) {
+    if (j.cut || j.dofs == 0 || j.scalarOffset < 0) continue;
+    design.scalars.segment(j.scalarOffset, j.rotation >= 0 ? j.dofs - 3 : j.dofs).setZero();
+    if (j.rotation >= 0) design.rotations[j.rotation] = Mat3::Identity();
+  }
+  system_.evaluateKinematics(state_.t, design, VectorXd::Zero(n), VectorXd::Zero(n));
+  const std::vector<BodyKinematics> before = system_.data().body;
+  system_.evaluateKinematics(state_.t, state_.q, state_.v, VectorXd::Zero(n));
+  const std::vector<BodyKinematics> after = system_.data().body;
+  std::vector<bool> carried(mesh.bodies.size(), false);
+  for (const FlexibleBodyJoint& w : model.flexibleBodyJoints) {
+    const int v = w.virtualBody;
+    const Joint& inboard = model.joints[model.bodies[v].inboardJoint];
+    if (inboard.type == JointType::Free && inboard.parentMarker.body == kGroundIndex) continue;  // held by its weld
+    std::size_t f = 0;
+    while (w.node >= mesh.bodies[f].firstNode + mesh.bodies[f].nodeCount) ++f;
+    const FlexibleBody& body = mesh.bodies[f];
+    bool free = true;
+    for (int i = body.firstNode; i < body.firstNode + body.nodeCount; ++i) free = free && mesh.nodes[i].free;
+    if (carried[f] || !free) continue;
+    carried[f] = true;
+    const Mat3 R = after[v].orientation * before[v].orientation.transpose();
+    const Vec3 shift = after[v].position - R * before[v].position;
+    for (int i = body.firstNode; i < body.firstNode + body.nodeCount; ++i) {
+      const FlexNode& node = mesh.nodes[i];
+      auto displacement = state_.q.scalars.segment<3>(node.scalarOffset);
+      Mat3& A = state_.q.rotations[node.rotation];
+      const Vec3 r = R * (node.reference.r + displacement) + shift;
+      displacement = r - node.reference.r;
+      A = R * A;
+      state_.v.segment<3>(node.dof[0]) = after[v].velocity + after[v].angularVelocity.cross(r - after[v].position);
+      state_.v.segment<3>(node.dof[3]) = A.transpose() * after[v].angularVelocity;
+    }
+  }
+}
+
 bool Simulation::initialize(double t0, std::string& message, std::vector<std::string>* notes) {
   state_.t = t0;
   system_.startDrives(t0);
+  carryFlexibleBodies();
   if (!assembleConstraints(message, notes)) return false;
   if (notes && system_.constraintCount() > 0) {
     const std::string redundant = redundantConstraints(state_.q, state_.v, true);
@@ -304,8 +367,30 @@ void Simulation::evaluateOutputs(bool reactions) {
       lambda = probe.lambda;
     }
   }
+  if (consistentSolve && system_.constraintCount() > 0) minimumNormMultipliers(vdot, lambda);
   system_.evaluate(state_.t, state_.q, state_.v, vdot, lambda);
   outputLambda_ = lambda;
+}
+
+// Redundant constraints (Bricard) leave the multipliers free along the
+// null space of Phi_q^T: the generalized constraint force f = Phi_q^T
+// lambda is unique, its split over the rows is whatever round-off picked
+// (reaction torques 1.6 % of their range apart between a step H and
+// nextafter(H)). The outputs take the minimum-norm lambda with that f, by
+// a complete orthogonal decomposition of Phi_q^T; f is taken from the
+// equations of motion, f = Q - M vdot (the residual with lambda = 0).
+// Singular values below 1e-10 of the largest count as zero: a row that is
+// a combination of others to round-off.
+void Simulation::minimumNormMultipliers(const VectorXd& vdot, VectorXd& lambda) {
+  const int n = system_.velocityCount(), m = system_.constraintCount();
+  VectorXd r, phi;
+  system_.residual(state_.t, state_.q, state_.v, vdot, VectorXd::Zero(m), r, phi);
+  const Eigen::MatrixXd Jt = constraintJacobian(state_.q, state_.v).transpose();
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod;
+  cod.setThreshold(1e-10);
+  cod.compute(Jt);
+  const VectorXd minimum = cod.solve(VectorXd(-r));
+  if (minimum.allFinite() && n > 0) lambda = minimum;
 }
 
 double Simulation::read(const Quantity& q) {

@@ -84,10 +84,12 @@ class Simulation {
   // present state, and the outputs of that state.
   bool startIntegrator(std::string& message);
   void evaluateOutputs(bool reactions);
+  void minimumNormMultipliers(const VectorXd& vdot, VectorXd& lambda);
 
   void updateQuaternions(bool reset);
   double quaternion(std::size_t i, const Mat3& A, int component) const;
   bool assembleConstraints(std::string& message, std::vector<std::string>* notes);
+  void carryFlexibleBodies();
   std::string constraintOwner(int row) const;
   std::string constraintOwners(const std::vector<int>& rows) const;
   Eigen::MatrixXd constraintJacobian(const Configuration& q, const VectorXd& v);

@@ -372,6 +372,19 @@ void System::constraintJacobian(double t, const Configuration& q, const VectorXd
   constraintRows(false, jacobian);
 }
 
+VectorXd System::velocityConstraints(double t, const Configuration& q, const VectorXd& v) {
+  const int n = model_.velocityCount, m = model_.constraintCount;
+  VectorXd r, before, after;
+  const double dt = 1e-6 * std::max(1.0, std::abs(t));
+  residual(t + dt, q, v, VectorXd::Zero(n), VectorXd::Zero(m), r, after);
+  residual(t - dt, q, v, VectorXd::Zero(n), VectorXd::Zero(m), r, before);
+  VectorXd violation = (after - before) / (2.0 * dt);
+  Triplets jacobian;
+  constraintJacobian(t, q, v, jacobian);
+  for (const auto& e : jacobian) violation[e.row()] += e.value() * v[e.col()];
+  return violation;
+}
+
 int System::auxiliaryCount(double cM) const {
   return recursiveMatrix_ && cM != 0.0 ? 18 * int(model_.bodies.size()) : 0;
 }
@@ -420,6 +433,13 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
 // consistent inertia with their tangents, 5.9 us, against 0.37 us:
 // benchmarks/flexible_phases.cpp), so a mesh's tangent about 16 of the
 // mesh's residuals. The larger part is taken for the whole.
+bool System::elasticCoordinates() const {
+  if (!model_.flexible.nodes.empty() || !model_.forces.empty()) return true;
+  for (const Joint& j : model_.joints)
+    if (j.springStiffness != 0.0) return true;
+  return false;
+}
+
 double System::tangentCost() const {
   double rigid = 0.0;
   if (!model_.bodies.empty()) rigid = recursiveMatrix_ ? 3.0 : double(tangentColours_.size() + 1);

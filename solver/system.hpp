@@ -52,8 +52,11 @@ class System : public Dynamics {
   // Phi_q over the joint rates and node DOFs (joint space, whatever form
   // the Newton matrix takes): for assembly and the constraints' rank.
   void constraintJacobian(double t, const Configuration& q, const VectorXd& v, Triplets& jacobian);
+  // Phi_q v + Phi_t; Phi_t (drives) by central differences in time.
+  VectorXd velocityConstraints(double t, const Configuration& q, const VectorXd& v) override;
   double constraintLengthScale() const override { return constraintLengthScale_; }
   double tangentCost() const override;
+  bool elasticCoordinates() const override;
   void turnWithRotations(const Configuration& from, const Configuration& to, VectorXd& x,
                          bool transpose) const override;
   void turnOverStep(const Configuration& q, const VectorXd& v, double h, VectorXd& x) const override;

@@ -45,6 +45,16 @@ class Dynamics {
   // were computed from: their round-off is a few ulps of it, which no Newton
   // correction can remove (a 40 m long chain of bodies: ~1e-14 m).
   virtual double constraintLengthScale() const { return 1.0; }
+  // Phi_q v + Phi_t at (t, q, v): the velocity constraints' violation
+  // (constraintCount rows; empty when the system cannot say).
+  virtual VectorXd velocityConstraints(double /*t*/, const Configuration& /*q*/, const VectorXd& /*v*/) { return {}; }
+  // Whether stiff forces read the coordinates (flexible nodes, springs,
+  // bushings): then their round-off, a few ulps of the coordinates, makes
+  // force noise that the Newton corrections cannot resolve below. A rigid
+  // system moved by gravity, inertia and constraints alone resolves
+  // corrections far below its coordinates' ulps (they add to the substep's
+  // increment, not to the coordinates).
+  virtual bool elasticCoordinates() const { return true; }
   // What a fresh tangent costs, in residual evaluations: an estimate from
   // the system's structure (deterministic, unlike a timing), for the
   // integrator's choice between refreshing the Newton matrix and iterating

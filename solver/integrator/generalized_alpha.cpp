@@ -105,6 +105,7 @@ bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial,
   factoredStep_ = h;
   factoredAt_ = trial.q;
   substepsSinceFactorization_ = 0.0;
+  elasticCoordinates_ = system.elasticCoordinates();
   correctionNoise_ = constraintNoise(system, system.velocityCount(), system.constraintCount(),
                                      assembledIterationMatrix().rows());
   return true;
@@ -118,7 +119,7 @@ bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial,
 // pseudo-random sign pattern of the rows' round-off level.
 double GeneralizedAlpha::constraintNoise(const Dynamics& system, int n, int m, int size) const {
   if (m == 0) return 0.0;
-  const double level = 16.0 * std::numeric_limits<double>::epsilon() * system.constraintLengthScale();
+  const double level = 2.0 * std::numeric_limits<double>::epsilon() * system.constraintLengthScale();
   VectorXd rhs = VectorXd::Zero(size);
   unsigned pattern = 12345u;
   for (int i = 0; i < m; ++i) {
@@ -127,6 +128,26 @@ double GeneralizedAlpha::constraintNoise(const Dynamics& system, int n, int m, i
   }
   const double noise = solver_.solve(rhs).head(n).cwiseAbs().maxCoeff();
   return std::isfinite(noise) ? noise : 0.0;
+}
+
+// Without numerical damping (rho_inf = 1) index-3 generalized-alpha is
+// only weakly stable in the constraint directions: the velocity-level
+// violation Phi_q v + Phi_t is not damped and drifts (four_bar at rho_inf
+// = 1: energy error 3.7e-4 J at 5 s, 0.57 J at 15 s, Newton failing at
+// 16.4 s). There each accepted substep removes it: the velocity change
+// dv = gamma' dq with [S Phi_q^T; Phi_q 0] [dq; .] = [0; -violation /
+// gamma'], through the factorised Newton matrix (S ~ M for the step: the
+// least change in the mass metric, to O(h)).
+void GeneralizedAlpha::projectVelocities(Dynamics& system, IntegratorState& trial, double gammaPrime) {
+  const int n = system.velocityCount(), m = system.constraintCount();
+  const VectorXd violation = system.velocityConstraints(trial.t, trial.q, trial.v);
+  if (violation.size() != m) return;
+  rhs_.setZero(assembledIterationMatrix().rows());
+  rhs_.segment(n, m) = -violation / gammaPrime;
+  system.turnWithRotations(factoredAt_, trial.q, rhs_, true);
+  solver_.solve(rhs_, delta_);
+  system.turnWithRotations(factoredAt_, trial.q, delta_, false);
+  if (delta_.allFinite()) trial.v += gammaPrime * delta_.head(n);
 }
 
 bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
@@ -160,11 +181,19 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
   // Corrections computed with the current factorization, if it was made in
   // this substep (-1: an earlier substep's matrix).
   int withFreshMatrix = -1;
-  // Corrections cannot resolve below a few ulps of the coordinates, nor
-  // below the noise the constraints' round-off makes (constraintNoise).
+  // The round-off floor of the corrections: a few ulps of the coordinates
+  // where stiff forces read them (Dynamics::elasticCoordinates), the noise
+  // the constraints' round-off makes (constraintNoise), and a few ulps of
+  // the substep's own increment, to which the corrections add (a rigid
+  // tree resolves far below its coordinates' ulps).
+  const double epsilon = std::numeric_limits<double>::epsilon();
   const double coordinateFloor =
-      256.0 * std::numeric_limits<double>::epsilon() *
-      std::max(1.0, s.q.scalars.size() ? s.q.scalars.cwiseAbs().maxCoeff() : 0.0);
+      elasticCoordinates_
+          ? 256.0 * epsilon * std::max(1.0, s.q.scalars.size() ? s.q.scalars.cwiseAbs().maxCoeff() : 0.0)
+          : 0.0;
+  // The tolerance holds for the error left in q (m, rad), v (per s) and
+  // vdot (per s^2); see the convergence test below.
+  const double target = options_.tolerance * std::min({1.0, 1.0 / gammaPrime, 1.0 / betaPrime});
   for (int k = 0; k < options_.maxIterations; ++k) {
     system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, r, phi);
     if (!allFinite(r) || !allFinite(phi)) {
@@ -220,48 +249,73 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     trial.q = s.q;
     system.retract(trial.q, hDeltaQ);
     if (m > 0) trial.lambda += betaPrime * delta.segment(n, m);
-    // Converged when the error left after this correction is below the
-    // tolerance: with contraction rate rho it is about rho / (1 - rho) times
-    // the correction (Hairer & Wanner IV.8), which matters for modified
-    // Newton whose rho is not small; and the constraints are met.
-    // A correction far below the tolerance is at the round-off floor, where
-    // rho is noise: converged too. The correction itself need not be below
-    // the tolerance (Hairer & Wanner's test is on the estimate alone): with
-    // a contraction of 1e-6 (a modified Newton matrix a few substeps old) a
-    // correction of 1e-13 leaves ~1e-19, and a further iteration would only
-    // correct round-off. Under quadratic (fresh-matrix) convergence rho
-    // falls from one iteration to the next, so the estimate is pessimistic.
+    // Converged when the error left after this correction is small at
+    // every level. With contraction rate rho it is about rho / (1 - rho)
+    // times the correction (Hairer & Wanner IV.8), so never at the first.
+    // A position error e left in q is an error gamma' e in v and beta' e
+    // (~ e / (beta h^2)) in vdot, which acts on the next substeps as a force
+    // error: the tolerance holds for q (m, rad), v (per s) and vdot (per
+    // s^2), so the Newton error shrinks with h faster than the
+    // discretisation error and the method keeps its order (a bound on q
+    // alone left four_bar's energy error growing as h shrank: 1.5e-7 J at
+    // h = 1e-4, 9e-6 J at 1e-5 over 1 s). Once two corrections in a row
+    // are round-off noise (below the floor) their sizes say nothing more:
+    // converged too (the error under the noise has contracted twice).
     const double rho = k > 0 ? size / previous : 1.0;
     if (k == 1 && withFreshMatrix < 0) firstRate_ = rho;
-    const double remaining = rho < 1.0 ? rho / (1.0 - rho) * size : HUGE_VAL;
-    const double floor = std::max({0.01 * options_.tolerance, coordinateFloor, 4.0 * correctionNoise_});
-    const bool small = size <= floor || remaining <= options_.tolerance;
+    const double floor =
+        std::max({coordinateFloor, 4.0 * correctionNoise_, 16.0 * epsilon * hDeltaQ.cwiseAbs().maxCoeff()});
+    // Where stiff forces read the coordinates, their round-off already
+    // makes force noise of the tolerance's order: one correction below the
+    // floor, or an error left below the tolerance in q, is converged there.
+    const bool belowFloor = size <= floor && (elasticCoordinates_ || (k > 0 && previous <= floor));
+    // Before a second correction, the rate this matrix showed in the
+    // previous substep stands in for it (a loose tolerance then stops at
+    // the first correction every other substep; the rate is never older
+    // than one substep, as a kept matrix ages). Elastic systems keep the
+    // old rule, never at the first correction.
+    const double rate = k > 0 ? rho : withFreshMatrix < 0 && !elasticCoordinates_ ? lastRate_ : 1.0;
+    const double remaining = rate < 1.0 ? rate / (1.0 - rate) * size : HUGE_VAL;
+    const double resolved = elasticCoordinates_ ? std::max(target, options_.tolerance) : target;
+    // A fresh matrix's corrections that stop contracting below a looser
+    // floor (the coordinates' ulps, 16 times the constraint noise) are
+    // noise too: the noise estimate is only an estimate (Bricard's
+    // corrections hover at 2-4e-16 against an estimated 2e-16).
+    const bool noise = k > 0 && withFreshMatrix >= 1 && rho > 0.5 &&
+                       size <= std::max(256.0 * epsilon * std::max(1.0, s.q.scalars.size() ? s.q.scalars.cwiseAbs().maxCoeff() : 0.0),
+                                        16.0 * correctionNoise_);
+    const bool small = remaining <= resolved || size <= 0.01 * target || belowFloor || noise;
     if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= std::max(options_.tolerance, phiFloor))) {
+      lastRate_ = k > 0 ? rho : 1.0;
       lastIterations_ = k + 1;
       substepsSinceFactorization_ += 1.0;
       trial.substeps = s.substeps + 1;
       trial.newtonIterations = s.newtonIterations;
       trial.factorizations = s.factorizations;
       trial.rejectedSubsteps = s.rejectedSubsteps;
+      if (alphaM_ == alphaF_ && m > 0) projectVelocities(system, trial, gammaPrime);
       std::swap(s, trial);  // trial keeps s's buffers for the next substep
       return true;
     }
     // Modified Newton: a stale iteration matrix is refreshed when the
-    // contraction slows, or when at its rate the tolerance would not be
-    // reached in the few iterations left (a rate of 0.2 from 1e-3 to 1e-14
-    // needs 16: a long communication step's matrix, kept over ten substeps
-    // of a double pendulum, failed whole substeps that way); a fresh one
-    // that does not contract has failed. Corrections within ten times the
+    // contraction slows, or when at its rate the error left would not be
+    // resolved in the few iterations left (a rate of 0.2 from 1e-3 to
+    // 1e-14 needs 16: a long communication step's matrix, kept over ten
+    // substeps of a double pendulum, failed whole substeps that way; and
+    // a rate of 0.05 that leaves 1e-16 m per substep of a double pendulum
+    // at h = 1e-5 is a steady 3e-6 m/s^2 error in its accelerations:
+    // four corrections at most, where the tolerance holds for vdot); a
+    // fresh one that does not contract has failed. Corrections near the
     // round-off floor stay with the current matrix: there a refresh
     // (tangent and factorization, several iterations' worth) would save an
-    // iteration at most, and their rate is half noise.
-    // Judged only in the last few iterations: earlier, a refresh for a
-    // merely slow rate costs more than the iterations it saves wherever the
-    // tangent is expensive (flexible four-bar: +35 % per substep).
-    const int left = options_.maxIterations - 1 - k;
-    const bool tooSlow =
-        left <= 4 && rho < 1.0 && std::pow(rho, left) / (1.0 - rho) * size > options_.tolerance;
-    if (k > 0 && (size > 0.25 * previous || tooSlow) && size > 10.0 * floor) {
+    // iteration at most, and their rate is half noise. Where stiff forces
+    // read the coordinates the rate is judged only in the last few
+    // iterations: earlier, a refresh for a merely slow rate costs more
+    // than the iterations it saves wherever the tangent is expensive
+    // (flexible four-bar: +35 % per substep).
+    const int left = elasticCoordinates_ ? options_.maxIterations - 1 - k : 4;
+    const bool tooSlow = left <= 4 && rho < 1.0 && std::pow(rho, left) * remaining > resolved;
+    if (k > 0 && (size > 0.25 * previous || tooSlow) && size > (elasticCoordinates_ ? 10.0 : 1.0) * floor) {
       // Diverging: two corrections of this substep's own matrix, growing
       // (a correction right after a refresh is not compared with the stale
       // matrix's last one).

@@ -63,11 +63,13 @@ class GeneralizedAlpha : public TimeStepper {
   };
   MatrixFactors matrixFactors(double h) const;
   double constraintNoise(const Dynamics& system, int n, int m, int size) const;
+  void projectVelocities(Dynamics& system, IntegratorState& trial, double gammaPrime);
 
   double alphaM_, alphaF_, gamma_, beta_;
   LinearSolver solver_;
   double factoredStep_ = 0.0;  // substep size of the current factorization; 0 = none
   double correctionNoise_ = 0.0;  // of the current factorization (constraintNoise)
+  bool elasticCoordinates_ = true;  // of the system (Dynamics::elasticCoordinates)
   Configuration factoredAt_;  // configuration of the current factorization (turnWithRotations)
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
@@ -81,7 +83,9 @@ class GeneralizedAlpha : public TimeStepper {
   static constexpr int kFreshStarts = 4;
   double lastIterations_ = 1e9;  // Newton iterations of the last accepted substep (none yet: many)
   double substepsSinceFactorization_ = 0.0;  // accepted since the current factorization
-  double firstRate_ = 0.0;  // contraction at the first check of the last substep with a kept matrix
+  double firstRate_ = 0.0;
+  double lastRate_ = 1.0;  // contraction at the last check of the previous substep (1: unknown)
+  double keptRate_ = 1.0;  // contraction of the current factorization at its last check (1: not yet known)  // contraction at the first check of the last substep with a kept matrix
 };
 
 }  // namespace mfbd
