@@ -5,7 +5,9 @@
 # libgcc_s.so.1 stays shared: every glibc system has it (manylinux2014 lists
 # it among the system libraries), and the static unwinder of a new GCC would
 # need glibc 2.35's _dl_find_object.
-set(MFBD_GLIBC_2_17_WRAPPED memcpy exp log pow pthread_once fstat64 __libc_single_threaded getentropy arc4random)
+set(MFBD_GLIBC_2_17_WRAPPED memcpy exp log pow pthread_once fstat64 __libc_single_threaded getentropy arc4random
+    pthread_key_create pthread_key_delete pthread_getspecific pthread_setspecific
+    pthread_rwlock_rdlock pthread_rwlock_wrlock pthread_rwlock_unlock)
 
 function(mfbd_link_for_glibc_2_17 target)
   set_property(TARGET ${target} APPEND PROPERTY LINK_DEPENDS ${CMAKE_SOURCE_DIR}/cmake/fmi2_exports.map)

@@ -5,6 +5,7 @@
 // link-time optimisation: .symver names must reach the assembler as written.
 // The test of the ELF version requirements (tests/python/test_platforms.py)
 // names any symbol that a new glibc or GCC adds to the list.
+#include <pthread.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -21,18 +22,45 @@ double exp_glibc_2_2_5(double);
 double log_glibc_2_2_5(double);
 double pow_glibc_2_2_5(double, double);
 int pthread_once_glibc_2_2_5(int*, void (*)());
+// Thread-specific keys and read-write locks: libstdc++'s pmr pools, which
+// its from_chars(double) uses, moved from libpthread to libc in glibc 2.34.
+int pthread_key_create_glibc_2_2_5(pthread_key_t*, void (*)(void*));
+int pthread_key_delete_glibc_2_2_5(pthread_key_t);
+void* pthread_getspecific_glibc_2_2_5(pthread_key_t);
+int pthread_setspecific_glibc_2_2_5(pthread_key_t, const void*);
+int pthread_rwlock_rdlock_glibc_2_2_5(pthread_rwlock_t*);
+int pthread_rwlock_wrlock_glibc_2_2_5(pthread_rwlock_t*);
+int pthread_rwlock_unlock_glibc_2_2_5(pthread_rwlock_t*);
 int __fxstat64(int version, int fd, struct stat64* buf);  // GLIBC_2.2.5, no longer declared
 __asm__(".symver memcpy_glibc_2_2_5, memcpy@GLIBC_2.2.5");
 __asm__(".symver exp_glibc_2_2_5, exp@GLIBC_2.2.5");
 __asm__(".symver log_glibc_2_2_5, log@GLIBC_2.2.5");
 __asm__(".symver pow_glibc_2_2_5, pow@GLIBC_2.2.5");
 __asm__(".symver pthread_once_glibc_2_2_5, pthread_once@GLIBC_2.2.5");
+__asm__(".symver pthread_key_create_glibc_2_2_5, pthread_key_create@GLIBC_2.2.5");
+__asm__(".symver pthread_key_delete_glibc_2_2_5, pthread_key_delete@GLIBC_2.2.5");
+__asm__(".symver pthread_getspecific_glibc_2_2_5, pthread_getspecific@GLIBC_2.2.5");
+__asm__(".symver pthread_setspecific_glibc_2_2_5, pthread_setspecific@GLIBC_2.2.5");
+__asm__(".symver pthread_rwlock_rdlock_glibc_2_2_5, pthread_rwlock_rdlock@GLIBC_2.2.5");
+__asm__(".symver pthread_rwlock_wrlock_glibc_2_2_5, pthread_rwlock_wrlock@GLIBC_2.2.5");
+__asm__(".symver pthread_rwlock_unlock_glibc_2_2_5, pthread_rwlock_unlock@GLIBC_2.2.5");
 
 void* __wrap_memcpy(void* to, const void* from, std::size_t n) { return memcpy_glibc_2_2_5(to, from, n); }
 double __wrap_exp(double x) { return exp_glibc_2_2_5(x); }
 double __wrap_log(double x) { return log_glibc_2_2_5(x); }
 double __wrap_pow(double x, double y) { return pow_glibc_2_2_5(x, y); }
 int __wrap_pthread_once(int* once, void (*routine)()) { return pthread_once_glibc_2_2_5(once, routine); }
+int __wrap_pthread_key_create(pthread_key_t* key, void (*destructor)(void*)) {
+  return pthread_key_create_glibc_2_2_5(key, destructor);
+}
+int __wrap_pthread_key_delete(pthread_key_t key) { return pthread_key_delete_glibc_2_2_5(key); }
+void* __wrap_pthread_getspecific(pthread_key_t key) { return pthread_getspecific_glibc_2_2_5(key); }
+int __wrap_pthread_setspecific(pthread_key_t key, const void* value) {
+  return pthread_setspecific_glibc_2_2_5(key, value);
+}
+int __wrap_pthread_rwlock_rdlock(pthread_rwlock_t* lock) { return pthread_rwlock_rdlock_glibc_2_2_5(lock); }
+int __wrap_pthread_rwlock_wrlock(pthread_rwlock_t* lock) { return pthread_rwlock_wrlock_glibc_2_2_5(lock); }
+int __wrap_pthread_rwlock_unlock(pthread_rwlock_t* lock) { return pthread_rwlock_unlock_glibc_2_2_5(lock); }
 
 // fstat64 was a header inline over __fxstat64 before glibc 2.33 (1 is
 // _STAT_VER on x86-64).
