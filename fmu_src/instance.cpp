@@ -339,9 +339,10 @@ fmi2Status Instance::noVariablesOfType(const char* function, const char* type, s
 }
 
 // Times that differ by round-off are the same time: a master that computes
-// t0 + n H, t += H or integer nanoseconds lands within a few ulps of t + H.
-double Instance::timeRoundOff(double t, double now, double H) const {
-  const double scale = std::max({std::abs(t), std::abs(now), std::abs(startTime_), H});
+// t0 + n H, t += H or integer nanoseconds lands within a few ulps of the
+// largest of the times it adds (t0 and t).
+double Instance::timeRoundOff(double t, double now) const {
+  const double scale = std::max({std::abs(t), std::abs(now), std::abs(startTime_)});
   return 8.0 * std::numeric_limits<double>::epsilon() * scale;
 }
 
@@ -351,10 +352,10 @@ fmi2Status Instance::doStep(double t, double H) {
   if (!std::isfinite(H) || H <= 0.0)
     return fail("fmi2DoStep", "communicationStepSize must be finite and > 0, got " + numberText(H));
   const double end = t + H;
-  if (!std::isfinite(t) || !std::isfinite(end) || !(std::abs(t - now) <= timeRoundOff(t, now, H)))
+  if (!std::isfinite(t) || !std::isfinite(end) || !(std::abs(t - now) <= timeRoundOff(t, now)))
     return fail("fmi2DoStep", "currentCommunicationPoint " + numberText(t) + " is not the FMU's time " +
                                   numberText(now) + " (to round-off)");
-  if (stopTimeDefined_ && end > stopTime_ + timeRoundOff(end, stopTime_, H))
+  if (stopTimeDefined_ && end > stopTime_ + timeRoundOff(end, stopTime_))
     return fail("fmi2DoStep", "the step would pass stopTime " + numberText(stopTime_));
   const AdvanceResult result = simulation_->doStep(t, H);
   if (!result.ok) {

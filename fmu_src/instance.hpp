@@ -64,7 +64,7 @@ class Instance {
   bool checkValue(const Variable& v, double value, std::string& why) const;
   // The scene stays valid with these user parameter values.
   bool checkScene(const std::map<std::string, double>& userValues, std::string& why) const;
-  double timeRoundOff(double t, double now, double H) const;
+  double timeRoundOff(double t, double now) const;
   double currentTime() const;
   // Substeps, Newton iterations, factorizations and rejected substeps so far.
   std::string solverStatistics() const;

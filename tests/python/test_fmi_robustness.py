@@ -178,8 +178,8 @@ def _step_beyond_the_bound(fmu, start, t, H):
 
 
 @pytest.mark.parametrize("fmu, start, H, bound", [
-    ("cantilever_vibration", {"solver.h_max": 1e-9}, 0.01, "1e+06"),  # 1e7 substeps
-    ("pendulum", {}, 1e300, "1e+06"),
+    ("cantilever_vibration", {"solver.h_max": 1e-9}, 0.01, "1e+05"),  # 1e7 substeps
+    ("pendulum", {}, 1e300, "1e+05"),
     ("pendulum", {"solver.max_substeps": 5}, 0.01, "5"),  # 10 substeps
 ])
 def test_a_step_beyond_max_substeps_is_discarded_at_once_with_the_step_start(fmu, start, H, bound):
