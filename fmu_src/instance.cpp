@@ -351,11 +351,15 @@ fmi2Status Instance::doStep(double t, double H) {
   const double now = simulation_->time();
   if (!std::isfinite(H) || H <= 0.0)
     return fail("fmi2DoStep", "communicationStepSize must be finite and > 0, got " + numberText(H));
-  const double end = t + H;
-  if (!std::isfinite(t) || !std::isfinite(end) || !(std::abs(t - now) <= timeRoundOff(t, now)))
+  if (!std::isfinite(t) || !(std::abs(t - now) <= timeRoundOff(t, now)))
     return fail("fmi2DoStep", "currentCommunicationPoint " + numberText(t) + " is not the FMU's time " +
                                   numberText(now) + " (to round-off)");
-  if (stopTimeDefined_ && end > stopTime_ + timeRoundOff(end, stopTime_))
+  const double end = t + H;
+  if (!std::isfinite(end))
+    return fail("fmi2DoStep", "currentCommunicationPoint + communicationStepSize = " + numberText(t) + " + " +
+                                  numberText(H) + " is not a finite time");
+  // A master that adds up its steps may pass stopTime by its sum's drift.
+  if (stopTimeDefined_ && end > stopTime_ + 1e-9 * std::max(1.0, std::abs(stopTime_)))
     return fail("fmi2DoStep", "the step would pass stopTime " + numberText(stopTime_));
   const AdvanceResult result = simulation_->doStep(t, H);
   if (!result.ok) {
