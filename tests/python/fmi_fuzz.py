@@ -385,7 +385,12 @@ class Fuzzer:
         valid = not wrong and math.isfinite(H) and H > 0 and math.isfinite(t + H) and not past_stop
         if status in (OK, DISCARD) and not valid:
             self.flag("accepted", f"fmi2DoStep({t!r}, {H!r}) at FMU time {self.time!r} returned {STATUS[status]}")
-        if state != STEP_COMPLETE or status == ERROR:
+        if state != STEP_COMPLETE:
+            return
+        if status == ERROR:  # refused: nothing moved
+            after = self.get(c, self.model.outputs)
+            if before is not None and (after is None or bits(after) != bits(before)):
+                self.flag("changed", "a refused fmi2DoStep changed the outputs")
             return
         if status == OK:
             self.time = t + H
