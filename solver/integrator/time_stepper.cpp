@@ -108,6 +108,7 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
   double h = std::min(s.h > 0.0 ? s.h : options_.hMax, options_.hMax);
   double tried = 0.0;  // substeps tried, rejected ones included
   int successes = 0;
+  std::string rejected;  // why the last substep failed, until one succeeds
   auto fail = [&](const std::string& message) {
     result.ok = false;
     result.reachedTime = s.t;
@@ -122,9 +123,9 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
     const double remaining = duration - elapsed;
     const double count = std::max(1.0, std::ceil(remaining / h * (1.0 - 1e-9)));
     if (!(tried + count <= options_.maxSubsteps)) {
-      return fail("the step of " + numberText(duration) + " s would need " + numberText(tried + count) +
-                  " substeps of at most " + numberText(h) + " s, more than solver.max_substeps = " +
-                  numberText(options_.maxSubsteps));
+      return fail(rejected + (rejected.empty() ? "the step of " : "; the step of ") + numberText(duration) +
+                  " s would need " + numberText(tried + count) + " substeps of at most " + numberText(h) +
+                  " s, more than solver.max_substeps = " + numberText(options_.maxSubsteps));
     }
     const bool last = count == 1.0;
     const double step = last ? remaining : remaining / count;
@@ -133,6 +134,7 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
     if (substep(system, s, step, why)) {
       elapsed = last ? duration : elapsed + step;
       s.t = start + elapsed;
+      rejected.clear();
       restoreOrthogonality(s.q);
       if (++successes >= 2 && h < options_.hMax) {
         h = std::min(2.0 * h, options_.hMax);
@@ -143,10 +145,9 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
     ++s.rejectedSubsteps;
     successes = 0;
     h = 0.5 * step;
-    if (h < options_.hMin) {
-      return fail("substep failed at t = " + numberText(s.t) + " with h = " + numberText(step) +
-                  " (h_min = " + numberText(options_.hMin) + "): " + why);
-    }
+    rejected = "substep failed at t = " + numberText(s.t) + " with h = " + numberText(step) + " (h_min = " +
+               numberText(options_.hMin) + "): " + why;
+    if (h < options_.hMin) return fail(rejected);
   }
   s.t = start + duration;
   s.h = h;

@@ -192,14 +192,18 @@ def test_a_step_beyond_max_substeps_is_discarded_at_once_with_the_step_start(fmu
 
 def test_max_substeps_counts_rejected_substeps(tmp_path):
     # Newton allowed one iteration to a tolerance it cannot reach: every
-    # substep fails and halves h; with 3 substeps allowed the third try ends it.
+    # substep fails and halves h. Ten substeps of h_max fit in 12, but after
+    # the first fails, twenty of half the size do not.
     scene = load_scene("pendulum")
     scene["solver"] = {"h_max": 1e-3, "h_min": 1e-9, "max_iterations": 1, "tolerance": 1e-300}
     s = Slave(packed(scene, tmp_path))
     try:
-        s.start({"angle0": 0.3, "solver.max_substeps": 3})
+        s.start({"angle0": 0.3, "solver.max_substeps": 12})
         assert s.step(0.0, 0.01) == DISCARD
-        assert "would need" in s.messages() and "more than solver.max_substeps = 3" in s.messages()
+        message = s.messages()
+        assert "substep failed at t = 0 with h = 0.001" in message  # the cause comes first
+        assert "; the step of 0.01 s would need 21 substeps" in message
+        assert "more than solver.max_substeps = 12" in message
     finally:
         _done(s)
 
