@@ -376,14 +376,14 @@ fmi2Status Instance::doStep(double t, double H) {
   return fmi2OK;
 }
 
-fmi2Status Instance::getRealStatus(fmi2StatusKind kind, fmi2Real* value) {
+fmi2Status Instance::getRealStatus(int kind, fmi2Real* value) {
   if (!value) return fail("fmi2GetRealStatus", "null value argument");
   if (kind != fmi2LastSuccessfulTime) return fail("fmi2GetRealStatus", "only fmi2LastSuccessfulTime is available");
   *value = lastSuccessfulTime_;
   return fmi2OK;
 }
 
-fmi2Status Instance::getBooleanStatus(fmi2StatusKind kind, fmi2Boolean* value) {
+fmi2Status Instance::getBooleanStatus(int kind, fmi2Boolean* value) {
   if (!value) return fail("fmi2GetBooleanStatus", "null value argument");
   if (kind != fmi2Terminated) return fail("fmi2GetBooleanStatus", "only fmi2Terminated is available");
   *value = terminatedBySlave_ ? fmi2True : fmi2False;

@@ -47,8 +47,8 @@ class Instance {
   // Integer/Boolean/String: the scene has none of these; any reference is unknown.
   fmi2Status noVariablesOfType(const char* function, const char* type, std::size_t n, const fmi2ValueReference vr[]);
   fmi2Status doStep(double currentCommunicationPoint, double communicationStepSize);
-  fmi2Status getRealStatus(fmi2StatusKind kind, fmi2Real* value);
-  fmi2Status getBooleanStatus(fmi2StatusKind kind, fmi2Boolean* value);
+  fmi2Status getRealStatus(int kind, fmi2Real* value);
+  fmi2Status getBooleanStatus(int kind, fmi2Boolean* value);
   fmi2Status unsupported(const char* function, const char* why);
 
   void log(fmi2Status status, const char* category, const std::string& message) const;
