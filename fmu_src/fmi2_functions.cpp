@@ -1,6 +1,7 @@
 // The FMI 2.0 Co-Simulation functions: thin wrappers over Instance. Each one
 // checks the call sequence (allowed states per the standard's table, FMI 2.0
 // section 4.2.4), and no exception ever crosses the C boundary.
+#include <cstring>
 #include <exception>
 
 #include "fmi2Functions.h"
@@ -211,8 +212,16 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind, fmi2Status*) {
   });
 }
 
+// A C master may pass any int as the kind: read it as one (loading an
+// out-of-range value as the C++ enum is undefined).
+int kindOf(const fmi2StatusKind& s) {
+  int kind;
+  std::memcpy(&kind, &s, sizeof kind);
+  return kind;
+}
+
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value) {
-  return guarded(c, "fmi2GetRealStatus", kStatus, [&](Instance* i) { return i->getRealStatus(s, value); });
+  return guarded(c, "fmi2GetRealStatus", kStatus, [&](Instance* i) { return i->getRealStatus(kindOf(s), value); });
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind, fmi2Integer*) {
@@ -222,7 +231,7 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind, fmi2Integ
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value) {
-  return guarded(c, "fmi2GetBooleanStatus", kStatus, [&](Instance* i) { return i->getBooleanStatus(s, value); });
+  return guarded(c, "fmi2GetBooleanStatus", kStatus, [&](Instance* i) { return i->getBooleanStatus(kindOf(s), value); });
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind, fmi2String*) {

@@ -1,12 +1,15 @@
 #include "instance.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdarg>
 #include <fstream>
 #include <sstream>
 
 #include "model_description.hpp"
 #include "resource_uri.hpp"
+#include "scene/number_text.hpp"
 
 namespace mfbd {
 
@@ -160,12 +163,12 @@ fmi2Status Instance::enterInitializationMode() {
     return fmi2Error;
   }
   state_ = FmuState::InitializationMode;
-  log(fmi2OK, "logEvents", "initialization mode at t = " + std::to_string(startTime_));
+  log(fmi2OK, "logEvents", "initialization mode at t = " + numberText(startTime_));
   return fmi2OK;
 }
 
 fmi2Status Instance::exitInitializationMode() {
-  if (simulationStale_ && !buildSimulation("fmi2ExitInitializationMode")) {
+  if ((simulationStale_ || !simulation_) && !buildSimulation("fmi2ExitInitializationMode")) {
     state_ = FmuState::Error;
     return fmi2Error;
   }
@@ -192,9 +195,9 @@ std::string Instance::solverStatistics() const {
 
 fmi2Status Instance::terminate() {
   state_ = FmuState::Terminated;
-  log(fmi2OK, "logEvents", "terminated at t = " + std::to_string(currentTime()));
+  log(fmi2OK, "logEvents", "terminated at t = " + numberText(currentTime()));
   if (logs(fmi2OK, "logStatistics"))
-    log(fmi2OK, "logStatistics", "t = " + std::to_string(currentTime()) + ": " + solverStatistics());
+    log(fmi2OK, "logStatistics", "t = " + numberText(currentTime()) + ": " + solverStatistics());
   return fmi2OK;
 }
 
@@ -215,15 +218,26 @@ double Instance::currentTime() const { return simulation_ ? simulation_->time() 
 
 fmi2Status Instance::getReal(const fmi2ValueReference vr[], std::size_t n, fmi2Real value[]) {
   if (n > 0 && (!vr || !value)) return fail("fmi2GetReal", "null array argument");
-  if (simulationStale_ && state_ == FmuState::InitializationMode && !buildSimulation("fmi2GetReal"))
+  if ((simulationStale_ || !simulation_) && state_ == FmuState::InitializationMode &&
+      !buildSimulation("fmi2GetReal"))
     return fmi2Error;
+  // Every reference is checked before any value is written.
   for (std::size_t i = 0; i < n; ++i) {
     const auto it = byReference_.find(vr[i]);
     if (it == byReference_.end())
       return fail("fmi2GetReal", "no Real variable with value reference " + std::to_string(vr[i]));
     const Variable& v = table_[it->second];
+    // In state Error (only a failed initialization leads there) no state
+    // is valid: the outputs have no value, parameters and inputs keep theirs.
+    if (v.causality == Causality::Output && (state_ == FmuState::Error || !simulation_))
+      return fail("fmi2GetReal", "output '" + v.name + "' has no value in state " + stateName(state_) +
+                                     " (the initialization failed; see the earlier error)");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t k = byReference_.find(vr[i])->second;
+    const Variable& v = table_[k];
     if (v.causality != Causality::Output) {
-      value[i] = values_[it->second];
+      value[i] = values_[k];
       continue;
     }
     value[i] = simulation_->read(v.quantity);
@@ -242,8 +256,13 @@ bool Instance::checkValue(const Variable& v, double value, std::string& why) con
   }
   switch (v.quantity.kind) {
     case QuantityKind::StepSizeMax:
-      if (value > 0.0) return true;
-      why = "expected h_max > 0";
+      // Below the scene's h_min no substep is allowed at all.
+      if (value >= scene_.solver.hMin) return true;
+      why = "expected h_max >= solver.h_min = " + numberText(scene_.solver.hMin) + " s";
+      return false;
+    case QuantityKind::MaxSubsteps:
+      if (value >= 1.0 && value <= kMaxSubstepsLimit && value == std::floor(value)) return true;
+      why = "expected a whole number from 1 to " + numberText(kMaxSubstepsLimit);
       return false;
     case QuantityKind::SpectralRadius:
       if (value >= 0.0 && value <= 1.0) return true;
@@ -258,27 +277,30 @@ bool Instance::checkValue(const Variable& v, double value, std::string& why) con
       if (value >= 0.0) return true;
       why = "expected damping >= 0";
       return false;
-    case QuantityKind::UserParameter: {
-      // The scene must stay valid with the new value: parse it to see.
-      std::map<std::string, double> userValues;
-      for (std::size_t i = 0; i < table_.size(); ++i)
-        if (table_[i].quantity.kind == QuantityKind::UserParameter) userValues[table_[i].name] = values_[i];
-      userValues[v.name] = value;
-      try {
-        Simulation check(parseScene(sceneText_, userValues));
-      } catch (const SceneError& e) {
-        why = std::string("the scene would be invalid: ") + e.what();
-        return false;
-      }
-      return true;
-    }
-    default: return true;
+    default: return true;  // user parameters: checkScene, all together
   }
+}
+
+bool Instance::checkScene(const std::map<std::string, double>& userValues, std::string& why) const {
+  try {
+    Simulation check(parseScene(sceneText_, userValues));
+  } catch (const SceneError& e) {
+    why = std::string("the scene would be invalid: ") + e.what();
+    return false;
+  }
+  return true;
 }
 
 fmi2Status Instance::setReal(const fmi2ValueReference vr[], std::size_t n, const fmi2Real value[]) {
   if (n > 0 && (!vr || !value)) return fail("fmi2SetReal", "null array argument");
   const bool running = state_ == FmuState::StepComplete;
+  // Every reference and value is checked before any is applied: a refused
+  // call changes nothing.
+  std::vector<std::size_t> index(n);
+  std::map<std::string, double> userValues;
+  std::string userChanges;
+  for (std::size_t i = 0; i < table_.size(); ++i)
+    if (table_[i].quantity.kind == QuantityKind::UserParameter) userValues[table_[i].name] = values_[i];
   for (std::size_t i = 0; i < n; ++i) {
     const auto it = byReference_.find(vr[i]);
     if (it == byReference_.end())
@@ -290,8 +312,18 @@ fmi2Status Instance::setReal(const fmi2ValueReference vr[], std::size_t n, const
                   "'" + v.name + "' is a fixed parameter; it can be set only before fmi2ExitInitializationMode");
     std::string why;
     if (!checkValue(v, value[i], why))
-      return fail("fmi2SetReal", "'" + v.name + "' = " + std::to_string(value[i]) + ": " + why);
-    values_[it->second] = value[i];
+      return fail("fmi2SetReal", "'" + v.name + "' = " + numberText(value[i]) + ": " + why);
+    if (v.quantity.kind == QuantityKind::UserParameter) {
+      userValues[v.name] = value[i];
+      userChanges += (userChanges.empty() ? "'" : ", '") + v.name + "' = " + numberText(value[i]);
+    }
+    index[i] = it->second;
+  }
+  std::string why;
+  if (!userChanges.empty() && !checkScene(userValues, why)) return fail("fmi2SetReal", userChanges + ": " + why);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Variable& v = table_[index[i]];
+    values_[index[i]] = value[i];
     if (v.variability == Variability::Fixed) simulationStale_ = true;
     else if (simulation_) simulation_->write(v.quantity, value[i]);
   }
@@ -301,44 +333,57 @@ fmi2Status Instance::setReal(const fmi2ValueReference vr[], std::size_t n, const
 fmi2Status Instance::noVariablesOfType(const char* function, const char* type, std::size_t n,
                                        const fmi2ValueReference vr[]) {
   if (n == 0) return fmi2OK;
+  if (!vr) return fail(function, "null array argument");
   return fail(function, std::string("no ") + type + " variable with value reference " +
-                            std::to_string(vr ? vr[0] : 0) + " (this FMU has Real variables only)");
+                            std::to_string(vr[0]) + " (this FMU has Real variables only)");
+}
+
+// Times that differ by round-off are the same time: a master that computes
+// t0 + n H, t += H or integer nanoseconds lands within a few ulps of the
+// largest of the times it adds (t0 and t).
+double Instance::timeRoundOff(double t, double now) const {
+  const double scale = std::max({std::abs(t), std::abs(now), std::abs(startTime_)});
+  return 8.0 * std::numeric_limits<double>::epsilon() * scale;
 }
 
 fmi2Status Instance::doStep(double t, double H) {
+  if (!simulation_) return fail("fmi2DoStep", "no simulation (initialization did not complete)");
   const double now = simulation_->time();
-  if (!std::isfinite(H) || H <= 0.0) return fail("fmi2DoStep", "communicationStepSize must be > 0, got " + std::to_string(H));
-  if (!std::isfinite(t) || std::abs(t - now) > 1e-9 * std::max(1.0, std::abs(now)))
-    return fail("fmi2DoStep", "currentCommunicationPoint " + std::to_string(t) + " is not the FMU's time " +
-                                  std::to_string(now));
-  if (stopTimeDefined_ && now + H > stopTime_ + 1e-9 * std::max(1.0, std::abs(stopTime_)))
-    return fail("fmi2DoStep", "the step would pass stopTime " + std::to_string(stopTime_));
-  const AdvanceResult result = simulation_->doStep(H);
+  if (!std::isfinite(H) || H <= 0.0)
+    return fail("fmi2DoStep", "communicationStepSize must be finite and > 0, got " + numberText(H));
+  if (!std::isfinite(t) || !(std::abs(t - now) <= timeRoundOff(t, now)))
+    return fail("fmi2DoStep", "currentCommunicationPoint " + numberText(t) + " is not the FMU's time " +
+                                  numberText(now) + " (to round-off)");
+  const double end = t + H;
+  if (!std::isfinite(end))
+    return fail("fmi2DoStep", "currentCommunicationPoint + communicationStepSize = " + numberText(t) + " + " +
+                                  numberText(H) + " is not a finite time");
+  // A master that adds up its steps may pass stopTime by its sum's drift.
+  if (stopTimeDefined_ && end > stopTime_ + 1e-9 * std::max(1.0, std::abs(stopTime_)))
+    return fail("fmi2DoStep", "the step would pass stopTime " + numberText(stopTime_));
+  const AdvanceResult result = simulation_->doStep(t, H);
   if (!result.ok) {
     state_ = FmuState::StepFailed;
     lastSuccessfulTime_ = simulation_->time();
     terminatedBySlave_ = true;
     log(fmi2Discard, "logStatusDiscard",
-        "fmi2DoStep: " + result.message + "; state restored to t = " + std::to_string(lastSuccessfulTime_));
+        "fmi2DoStep: " + result.message + "; state restored to t = " + numberText(lastSuccessfulTime_));
     return fmi2Discard;
   }
   lastSuccessfulTime_ = simulation_->time();
-  if (logs(fmi2OK, "logStep")) {
-    std::ostringstream msg;
-    msg << "t = " << simulation_->time() << ": " << solverStatistics();
-    log(fmi2OK, "logStep", msg.str());
-  }
+  if (logs(fmi2OK, "logStep"))
+    log(fmi2OK, "logStep", "t = " + numberText(simulation_->time()) + ": " + solverStatistics());
   return fmi2OK;
 }
 
-fmi2Status Instance::getRealStatus(fmi2StatusKind kind, fmi2Real* value) {
+fmi2Status Instance::getRealStatus(int kind, fmi2Real* value) {
   if (!value) return fail("fmi2GetRealStatus", "null value argument");
   if (kind != fmi2LastSuccessfulTime) return fail("fmi2GetRealStatus", "only fmi2LastSuccessfulTime is available");
   *value = lastSuccessfulTime_;
   return fmi2OK;
 }
 
-fmi2Status Instance::getBooleanStatus(fmi2StatusKind kind, fmi2Boolean* value) {
+fmi2Status Instance::getBooleanStatus(int kind, fmi2Boolean* value) {
   if (!value) return fail("fmi2GetBooleanStatus", "null value argument");
   if (kind != fmi2Terminated) return fail("fmi2GetBooleanStatus", "only fmi2Terminated is available");
   *value = terminatedBySlave_ ? fmi2True : fmi2False;

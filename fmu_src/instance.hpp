@@ -24,6 +24,9 @@ enum class FmuState : unsigned {
 
 class Instance {
  public:
+  // Largest solver.max_substeps accepted: beyond it the bound bounds nothing.
+  static constexpr double kMaxSubstepsLimit = 1e9;
+
   // Returns nullptr (after logging why) when the scene or GUID is bad.
   static Instance* create(const std::string& name, const std::string& guid, const std::string& resourceUri,
                           const fmi2CallbackFunctions* callbacks, bool loggingOn);
@@ -44,8 +47,8 @@ class Instance {
   // Integer/Boolean/String: the scene has none of these; any reference is unknown.
   fmi2Status noVariablesOfType(const char* function, const char* type, std::size_t n, const fmi2ValueReference vr[]);
   fmi2Status doStep(double currentCommunicationPoint, double communicationStepSize);
-  fmi2Status getRealStatus(fmi2StatusKind kind, fmi2Real* value);
-  fmi2Status getBooleanStatus(fmi2StatusKind kind, fmi2Boolean* value);
+  fmi2Status getRealStatus(int kind, fmi2Real* value);
+  fmi2Status getBooleanStatus(int kind, fmi2Boolean* value);
   fmi2Status unsupported(const char* function, const char* why);
 
   void log(fmi2Status status, const char* category, const std::string& message) const;
@@ -57,7 +60,11 @@ class Instance {
  private:
   Instance() = default;
   bool buildSimulation(const char* function);
+  // One value of a parameter or input on its own (user parameters: checkScene).
   bool checkValue(const Variable& v, double value, std::string& why) const;
+  // The scene stays valid with these user parameter values.
+  bool checkScene(const std::map<std::string, double>& userValues, std::string& why) const;
+  double timeRoundOff(double t, double now) const;
   double currentTime() const;
   // Substeps, Newton iterations, factorizations and rejected substeps so far.
   std::string solverStatistics() const;

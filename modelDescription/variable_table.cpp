@@ -73,6 +73,8 @@ std::vector<Variable> variableTable(const Scene& scene) {
         scene.solver.rhoInf);
   t.add("solver.tolerance", P, F, "", "Newton: largest position error left after the last correction (m, rad)",
         {QK::NewtonTolerance}, scene.solver.tolerance);
+  t.add("solver.max_substeps", P, F, "", "substeps one communication step may take (rejected ones included)",
+        {QK::MaxSubsteps}, scene.solver.maxSubsteps);
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
     if (jointDofs(jt.type) == 0 || jt.cut || jt.isVirtual) continue;
@@ -249,7 +251,7 @@ std::vector<Variable> variableTable(const Scene& scene) {
 
 std::string sceneGuid(const std::string& sceneText) {
   // Two 64-bit FNV-1a hashes with different offsets make 128 bits.
-  const std::string salted = "mfbd-fmu variable table v1\n" + sceneText;
+  const std::string salted = "mfbd-fmu variable table v2\n" + sceneText;
   std::uint64_t h1 = 0xcbf29ce484222325ull, h2 = 0x84222325cbf29ce4ull;
   for (unsigned char c : salted) {
     h1 = (h1 ^ c) * 0x100000001b3ull;

@@ -24,6 +24,7 @@ void setSceneParameter(Scene& scene, const Quantity& q, double value) {
     case QuantityKind::StepSizeMax: scene.solver.hMax = value; break;
     case QuantityKind::SpectralRadius: scene.solver.rhoInf = value; break;
     case QuantityKind::NewtonTolerance: scene.solver.tolerance = value; break;
+    case QuantityKind::MaxSubsteps: scene.solver.maxSubsteps = value; break;
     case QuantityKind::JointDamping: scene.joints[q.index].damping = value; break;
     case QuantityKind::FlexibleDamping: scene.flexibleBodies[q.index].damping = value; break;
     default: break;
@@ -37,6 +38,7 @@ double sceneParameter(const Scene& scene, const Quantity& q) {
     case QuantityKind::StepSizeMax: return scene.solver.hMax;
     case QuantityKind::SpectralRadius: return scene.solver.rhoInf;
     case QuantityKind::NewtonTolerance: return scene.solver.tolerance;
+    case QuantityKind::MaxSubsteps: return scene.solver.maxSubsteps;
     case QuantityKind::JointDamping: return scene.joints[q.index].damping;
     case QuantityKind::FlexibleDamping: return scene.flexibleBodies[q.index].damping;
     default: return 0.0;
@@ -297,12 +299,13 @@ double Simulation::quaternion(std::size_t i, const Mat3& A, int component) const
   return wxyz[component];
 }
 
-AdvanceResult Simulation::doStep(double H) {
+AdvanceResult Simulation::doStep(double t, double H) {
   // The state to come back to if the step fails: before any restart, so a
   // retried step restarts from the same state again.
   // Statics: an input that jumped breaks the load path the predictor follows.
   if (inputsChangedSinceStep_) state_.pathRate.resize(0);
   stepStart_ = state_;  // assigned into kept buffers: no allocation per step
+  state_.t = t;  // the master's clock: drives and loads see its times
   // An input that jumped at this communication point is a discontinuity:
   // restart generalized-alpha there, or its algorithmic acceleration would
   // carry the old input into the step (an O(h) error that does not go away).
@@ -319,7 +322,7 @@ AdvanceResult Simulation::doStep(double H) {
     std::string message;
     stepper_->restartAfterInputJump(system_, state_, message);
   }
-  AdvanceResult result = stepper_->advance(system_, state_, state_.t + H);
+  AdvanceResult result = stepper_->advance(system_, state_, H);
   if (!result.ok) {
     // Where the substeps gave up, say which constraints were redundant:
     // rows that the motion cannot meet together are the usual cause.
@@ -331,6 +334,7 @@ AdvanceResult Simulation::doStep(double H) {
     outputsCurrent_ = false;  // the workspace holds the failed trial, not the restored state
     return result;
   }
+  state_.t = t + H;  // exactly the master's next communication point
   system_.endStep(state_.t);
   inputsChangedSinceStep_ = false;
   driveRateChanged_ = false;
@@ -400,7 +404,8 @@ double Simulation::read(const Quantity& q) {
     case QuantityKind::Gravity:
     case QuantityKind::StepSizeMax:
     case QuantityKind::SpectralRadius:
-    case QuantityKind::NewtonTolerance: return sceneParameter(scene_, q);
+    case QuantityKind::NewtonTolerance:
+    case QuantityKind::MaxSubsteps: return sceneParameter(scene_, q);
     case QuantityKind::JointDamping: return model.joints[jointIndex_[q.index]].damping;
     case QuantityKind::JointForceInput:
     case QuantityKind::JointDriveRate: {

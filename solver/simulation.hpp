@@ -16,6 +16,7 @@ enum class QuantityKind {
   StepSizeMax,      //                                           (fixed)
   SpectralRadius,   //                                           (fixed)
   NewtonTolerance,  // position error left by Newton (m, rad)     (fixed)
+  MaxSubsteps,      // substeps per communication step at most    (fixed)
   JointDamping,     // index: joint                              (tunable)
   JointForceInput,  // index: joint, component: DOF              (input)
   JointDriveRate,   // index: joint; rate of a rate-input drive  (input)
@@ -68,8 +69,12 @@ class Simulation {
   // the iterations and how far nodes moved. Otherwise nothing. Call after
   // initialize and after setting the inputs (fmi2ExitInitializationMode).
   bool startFromEquilibrium(std::string& message, std::vector<std::string>* notes = nullptr);
-  // Advances to t + H; on failure keeps the state of the step start.
-  AdvanceResult doStep(double H);
+  // Advances by H from the master's time t (time() to round-off): the
+  // substeps integrate exactly H, and time() is then t + H as the master
+  // computes it, however large t is. On failure keeps the state of the
+  // step start.
+  AdvanceResult doStep(double t, double H);
+  AdvanceResult doStep(double H) { return doStep(state_.t, H); }
 
   double time() const { return state_.t; }
   const IntegratorState& state() const { return state_; }

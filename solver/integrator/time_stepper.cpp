@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
+
+#include "scene/number_text.hpp"
 
 namespace mfbd {
 
@@ -96,20 +97,44 @@ bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const
   return true;
 }
 
-AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double tEnd) {
+AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double duration) {
   AdvanceResult result;
   beginAdvance(system);
+  // Time within the step is kept as the time elapsed since its start: a
+  // small number, exact however large s.t is (at t = 1e10 a difference of
+  // absolute times has a resolution of 2e-6 s).
+  const double start = s.t;
+  double elapsed = 0.0;
   double h = std::min(s.h > 0.0 ? s.h : options_.hMax, options_.hMax);
+  double tried = 0.0;  // substeps tried, rejected ones included
   int successes = 0;
-  while (tEnd - s.t > 1e-12 * std::max(1.0, std::abs(tEnd))) {
+  std::string rejected;  // why the last substep failed, until one succeeds
+  auto fail = [&](const std::string& message) {
+    result.ok = false;
+    result.reachedTime = s.t;
+    result.message = message;
+    return result;
+  };
+  while (elapsed < duration) {
     // The rest in equal substeps of at most h (within round-off): no short
     // last one, and every substep of a run at constant h the same size, so
     // the Newton matrix of one serves the next (GeneralizedAlpha keeps it
-    // only for the same h).
-    const double remaining = tEnd - s.t;
-    const double step = remaining / std::max(1.0, std::ceil(remaining / h * (1.0 - 1e-9)));
+    // only for the same h). The last one takes exactly what is left.
+    const double remaining = duration - elapsed;
+    const double count = std::max(1.0, std::ceil(remaining / h * (1.0 - 1e-9)));
+    if (!(tried + count <= options_.maxSubsteps)) {
+      return fail(rejected + (rejected.empty() ? "the step of " : "; the step of ") + numberText(duration) +
+                  " s would need " + numberText(tried + count) + " substeps of at most " + numberText(h) +
+                  " s, more than solver.max_substeps = " + numberText(options_.maxSubsteps));
+    }
+    const bool last = count == 1.0;
+    const double step = last ? remaining : remaining / count;
+    ++tried;
     std::string why;
     if (substep(system, s, step, why)) {
+      elapsed = last ? duration : elapsed + step;
+      s.t = start + elapsed;
+      rejected.clear();
       restoreOrthogonality(s.q);
       if (++successes >= 2 && h < options_.hMax) {
         h = std::min(2.0 * h, options_.hMax);
@@ -120,19 +145,13 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
     ++s.rejectedSubsteps;
     successes = 0;
     h = 0.5 * step;
-    if (h < options_.hMin) {
-      std::ostringstream msg;
-      msg << "substep failed at t = " << s.t << " with h = " << step << " (h_min = " << options_.hMin
-          << "): " << why;
-      result.ok = false;
-      result.reachedTime = s.t;
-      result.message = msg.str();
-      return result;
-    }
+    rejected = "substep failed at t = " + numberText(s.t) + " with h = " + numberText(step) + " (h_min = " +
+               numberText(options_.hMin) + "): " + why;
+    if (h < options_.hMin) return fail(rejected);
   }
-  s.t = tEnd;
+  s.t = start + duration;
   s.h = h;
-  result.reachedTime = tEnd;
+  result.reachedTime = s.t;
   return result;
 }
 

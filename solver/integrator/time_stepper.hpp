@@ -42,9 +42,11 @@ class TimeStepper {
   // The inputs jumped at state.t (the state solves the equations of the old
   // ones): adjust the integrator's history to the new ones. Nothing by default.
   virtual bool restartAfterInputJump(Dynamics&, IntegratorState&, std::string&) { return true; }
-  // Substeps from state.t to tEnd. On failure `state` is left at an
+  // Substeps over `duration` from state.t, at most options().maxSubsteps
+  // of them (tried ones, rejected included): the substep sizes depend on
+  // the duration alone, not on state.t. On failure `state` is left at an
   // intermediate time: the caller restores the step start.
-  AdvanceResult advance(Dynamics& system, IntegratorState& state, double tEnd);
+  AdvanceResult advance(Dynamics& system, IntegratorState& state, double duration);
 
   const SolverOptions& options() const { return options_; }
 

@@ -181,6 +181,9 @@ struct SolverOptions {
   double hMax = 1e-3;       // largest implicit substep, s
   double hMin = 1e-9;       // smallest substep before a step is discarded, s
   double rhoInf = 0.8;      // generalized-alpha spectral radius at infinity
+  // Substeps (tried, rejected ones included) one communication step may
+  // take: the bound on the work of one fmi2DoStep.
+  double maxSubsteps = 1e5;
   // Newton: the position error left after the last correction (m, rad).
   // Truncation errors of Newton accumulate over many steps as a drift (energy
   // of a conservative system), so the default is near round-off.

@@ -1,0 +1,23 @@
+"""The FMU under random FMI call sequences (tests/python/fmi_fuzz.py): legal
+and illegal orders, hostile values, NULL arrays and fmi2Instantiate variants
+over every example FMU, each FMU's sequences in a child process. A bounded
+run of about a minute; `bash scripts/fuzz.sh` runs longer ones."""
+import os
+
+import fmi_fuzz
+from conftest import example_fmus
+
+SECONDS = 45.0  # over all FMUs
+
+
+def test_random_call_sequences_crash_hang_or_break_no_rule():
+    seed = int(os.environ.get("MFBD_FUZZ_SEED", "15"))
+    fmus = example_fmus()
+    assert len(fmus) >= 10
+    failures, sequences = [], 0
+    for fmu in fmus:
+        summary, found = fmi_fuzz.run(fmu, seed, budget=SECONDS / len(fmus), timeout=60.0)
+        failures += found
+        sequences += summary["sequences"] if summary else 0
+    assert not failures, f"seed {seed}:\n" + "\n\n".join(failures)
+    assert sequences >= 20 * len(fmus)  # the run did something
