@@ -69,17 +69,10 @@ def scales(outputs, runs):
     return np.maximum(own, [kind[k] for k in kinds])
 
 
-# Bricard's constraints are redundant: the reactions split over the
-# redundant rows as round-off picks, so they depend on the last bit of the
-# step until the multipliers are unique (minimum norm). (n_four_bar passes
-# no singular configuration in 0.3 s: it agrees.)
-REDUNDANT = {"bricard"}
-
-
-@pytest.mark.parametrize("fmu", [
-    pytest.param(f, id=f.stem, marks=[pytest.mark.xfail(
-        strict=True, reason="reactions of redundant / singular constraints depend on the step's last bit")]
-        if f.stem in REDUNDANT else []) for f in example_fmus()])
+# Bricard's constraints are redundant: its reactions are the minimum-norm
+# multipliers, unique, so they agree too. (n_four_bar passes no singular
+# configuration in 0.3 s.)
+@pytest.mark.parametrize("fmu", example_fmus(), ids=lambda f: f.stem)
 def test_every_master_gets_the_same_outputs_and_its_own_time(fmu):
     outputs, a, grid_times = drive(fmu, "grid")
     _, b, accumulated_times = drive(fmu, "accumulate")

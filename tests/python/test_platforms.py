@@ -30,14 +30,17 @@ MASTER_EXE = BUILD / "win64" / "fmu_master.exe"
 # axial forces carry that to 1.4e-8 of the force scale by 1 s. n_four_bar
 # passes singular configurations (issue 15), where the two sparse LUs'
 # round-off (KLU, Eigen's SparseLU) moves the outputs: 7.9e-10 of their
-# scale up to 0.3 s, 1e-4 at 1 s. bricard: kinematics within 2e-10 up to
-# 0.2 s, 2.2e-9 at 1 s.
+# scale up to 0.3 s, 1e-4 at 1 s. bricard (redundant loop, minimum-norm
+# reactions): every output within 7e-10 up to 0.2 s, 1.1e-9 at 1 s.
 SPAN = 1.0
 SHORTER_SPAN = {"spin_up_beam": 0.5, "motor_spin_up": 0.5, "n_four_bar": 0.3, "bricard": 0.2}
-# The reactions of redundant constraints are not unique: the split over the
-# redundant rows is whatever round-off picks (issue 15), so bricard's
-# reactions differ by 1e-4 of their scale at 0.2 s between the platforms.
-KINEMATICS_ONLY = {"bricard"}
+# Where the two platforms' linear solvers (KLU on linux64, Eigen's SparseLU on
+# win64) leave Newton's last iterate apart by more than 1e-9 of a kind's
+# scale: flexible_robot_arm's flexible-body-joint forces at the gripper,
+# 1.1-1.3e-9 of the force scale from 0.1 s on (both iterates meet the Newton
+# tolerance; the stiff weld turns their difference into force). KLU built for
+# win64 too would remove this exception.
+LOOSER = {"flexible_robot_arm": 2e-9}
 
 
 def binaries(fmu, platform):
@@ -172,8 +175,7 @@ def test_win64_under_wine_matches_linux64(fmu, tmp_path, wine):
     unzip = tmp_path / "with space"
     extract(str(fmu), str(unzip))
     md = read_model_description(str(fmu))
-    outputs = [v for v in md.modelVariables if v.causality == "output" and v.type == "Real"
-               and not (fmu.stem in KINEMATICS_ONLY and v.unit in ("N", "N.m"))]
+    outputs = [v for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
     vrs = [v.valueReference for v in outputs]
     identifier = md.coSimulation.modelIdentifier
     span = SHORTER_SPAN.get(fmu.stem, SPAN)
@@ -188,7 +190,7 @@ def test_win64_under_wine_matches_linux64(fmu, tmp_path, wine):
         kind_scale[v.unit] = max([kind_scale.get(v.unit, 1e-3)] + [abs(r[k + 1]) for r in linux])
     worst = []
     for k, v in enumerate(outputs):
-        tolerance = 1e-9 * kind_scale[v.unit]
+        tolerance = LOOSER.get(fmu.stem, 1e-9) * kind_scale[v.unit]
         difference = max(abs(w[k + 1] - l[k + 1]) for w, l in zip(windows, linux))
         if not difference <= tolerance:
             worst.append((v.name, difference, tolerance))
