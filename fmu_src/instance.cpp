@@ -274,8 +274,12 @@ bool Instance::checkValue(const Variable& v, double value, std::string& why) con
       return false;
     case QuantityKind::JointDamping:
     case QuantityKind::FlexibleDamping:
-      if (value >= 0.0) return true;
-      why = "expected damping >= 0";
+      if (value >= 0.0 && value <= kLargestNumber) return true;
+      why = "expected damping in 0.." + numberText(kLargestNumber) + " (the range of scene numbers)";
+      return false;
+    case QuantityKind::Gravity:
+      if (std::abs(value) <= kLargestNumber) return true;
+      why = "expected a magnitude of at most " + numberText(kLargestNumber) + " m/s^2 (the range of scene numbers)";
       return false;
     default: return true;  // user parameters: checkScene, all together
   }

@@ -30,19 +30,7 @@ inline std::string typeName(const json& j) {
   return "an object";
 }
 
-// Ranges of scene numbers (README "Scene format"). Every number: 0 or a
-// magnitude from the smallest normal double to kLargestNumber. A subnormal
-// number (below 2.2e-308) carries fewer than 53 bits and is no physical
-// quantity in SI units; refusing it in one place refuses the JSON number
-// and the expression alike. 1e20 is far above any quantity of a machine
-// (Young's modulus of diamond 1.2e12 Pa) and keeps the solver's products of
-// a few scene numbers and their squares (norms) inside the double range.
-// World coordinates of the design configuration, and joint coordinates,
-// stay within kLargestCoordinate: the solver works in one world frame, where
-// the last bit of a coordinate of 1e6 m is already 1e-10 m, ten thousand
-// times the default Newton tolerance; squares of coordinates stay finite.
-inline constexpr double kLargestNumber = 1e20;
-inline constexpr double kLargestCoordinate = 1e6;
+// kLargestNumber and kLargestCoordinate: scene/scene.hpp.
 
 // A JSON object together with its path, for reading fields with checks.
 class Field {

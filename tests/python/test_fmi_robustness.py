@@ -155,6 +155,20 @@ def test_h_max_below_h_min_is_refused_naming_the_range(slave, h_max):
     assert slave.set("solver.h_max", 1e-9) == OK  # h_min itself is allowed
 
 
+@pytest.mark.parametrize("name, value", [("gravity.y", 1e300), ("gravity.x", -1e21), ("hinge.damping", 1e300),
+                                         ("hinge.damping", -1.0)])
+def test_built_in_parameters_beyond_the_scene_range_are_refused(slave, name, value):
+    """Gravity and damping keep to the range of scene numbers (1e20), as the
+    scene's own fields do: 1e300 was accepted and failed later."""
+    assert slave.instantiate()
+    start = next(v.start for v in slave.md.modelVariables if v.name == name)
+    assert slave.set(name, value) == ERROR
+    assert f"'{name}' =" in slave.messages() and "expected" in slave.messages()
+    assert slave.call("setupExperiment", None, 0.0, None) == OK
+    assert slave.call("enterInitializationMode") == OK, slave.messages()
+    assert slave.get(name) == float(start)
+
+
 @pytest.mark.parametrize("value", [0.0, -3.0, 2.5, 1e10, float("inf")])
 def test_max_substeps_outside_its_range_is_refused(slave, value):
     assert slave.instantiate()
