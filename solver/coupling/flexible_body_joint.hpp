@@ -1,4 +1,4 @@
-// The flexible body joint (DESIGN.md 3): six rows that weld a virtual body to
+// The flexible body joint (docs/design.md 3): six rows that weld a virtual body to
 // a flexible node, Phi^er = 0, written with the fixed joint of the joint
 // library: the node is the parent (its marker: the virtual body's design
 // frame, fixed in the node frame), the virtual body the child (its marker:

@@ -1,5 +1,5 @@
 // The joint library as constraints between two markers, in absolute form
-// (DESIGN.md 3): cut joints that close loops of the rigid tree, and the 6-DOF
+// (docs/design.md 3): cut joints that close loops of the rigid tree, and the 6-DOF
 // flexible body joint that welds a virtual body to a flexible node.
 //
 // A joint connects marker P, fixed in body i (the parent), and marker C, fixed
@@ -31,7 +31,7 @@
 // design configuration and no singularity within 90 degrees (dot rows) or
 // 180 degrees (log rows) of it.
 //
-// The flexible body joint of DESIGN.md 3 is the fixed type with the flexible
+// The flexible body joint of docs/design.md 3 is the fixed type with the flexible
 // node as parent (P = {0, C_j}) and the virtual body as child (C = {0, I}):
 // the same manifold as [r_j - r_j1; theta((A_j C_j)^T A_j1)], its translation
 // rows turned into the node's marker frame and taken child minus parent.
@@ -44,7 +44,7 @@
 // * dPhi = Phi_i [dr_i; dphi_i] + Phi_j [dr_j; dphi_j] + O(d^2).
 // * Ground is body i with r = 0, A = I and no variation: ignore Phi_i.
 // * The constraint applies the generalized force -Phi_z^T lambda to the
-//   bodies (EOM: M Ydot + Phi_Z^T lambda - Q = 0, DESIGN.md 3). Its world
+//   bodies (EOM: M Ydot + Phi_Z^T lambda - Q = 0, docs/design.md 3). Its world
 //   force and torque about r_j on body j are -Phi_j^T lambda.
 #pragma once
 #include <Eigen/Core>

@@ -1,4 +1,4 @@
-// Virtual bodies (DESIGN.md 3): wherever a joint or force element names a
+// Virtual bodies (docs/design.md 3): wherever a joint or force element names a
 // flexible node, the assembly puts a massless rigid body at that marker and
 // welds it to the node with a flexible body joint. The joint or force element
 // then connects rigid bodies only, so it is written once, against markers,

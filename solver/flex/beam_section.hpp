@@ -1,6 +1,6 @@
 // Cross-section properties of a beam, in SI units, in the section frame
 // (x along the beam axis, y and z the section's principal axes).
-// DESIGN.md 3 "Flexible bodies": the local linear Timoshenko stiffness of the
+// docs/design.md 3 "Flexible bodies": the local linear Timoshenko stiffness of the
 // corotational element and the lumped nodal inertia are built from these.
 #pragma once
 #include "math/rotation.hpp"

@@ -1,4 +1,4 @@
-// Consistent mass of a beam element's centre line (DESIGN.md 3 "Flexible
+// Consistent mass of a beam element's centre line (docs/design.md 3 "Flexible
 // bodies"): the interpolation of the classic beam element, linear along the
 // element and cubic (Hermite) across it, written in world quantities so that
 // it holds at any rotation.

@@ -1,4 +1,4 @@
-// Two-node 3D corotational beam element (DESIGN.md 3 "Flexible bodies").
+// Two-node 3D corotational beam element (docs/design.md 3 "Flexible bodies").
 //
 // Element-independent corotational formulation after Battini & Pacoste,
 // "Co-rotational beam elements with warping effects in instability problems",

@@ -1,4 +1,4 @@
-// The "nodal body" of a flexible mesh (DESIGN.md 3): node state and its
+// The "nodal body" of a flexible mesh (docs/design.md 3): node state and its
 // lumped inertia with the gyroscopic term.
 //
 // Conventions shared by every flex element (binding):

@@ -1,4 +1,4 @@
-// What the integrator sees of a mechanical system (DESIGN.md 2): a
+// What the integrator sees of a mechanical system (docs/design.md 2): a
 // configuration manifold with a retraction, the residual of the equations of
 // motion and constraints, and the iteration-matrix blocks with scalar factors.
 //   r   = M(q) vdot - Q(q, v, t) + Phi_q^T lambda        (velocityCount rows)

@@ -1,6 +1,6 @@
 // Rotations on SO(3): the exponential/log maps and their tangent operators.
 // Every orientation in the solver is a stored rotation matrix updated by an
-// incremental rotation vector through the exact exponential map (DESIGN.md 3),
+// incremental rotation vector through the exact exponential map (docs/design.md 3),
 // so orthogonality is kept to round-off over any number of steps.
 #pragma once
 #include <Eigen/Core>

@@ -16,7 +16,7 @@ namespace mfbd {
 inline constexpr int kGroundIndex = -1;
 
 // A frame fixed in a body: origin and orientation in the body frame. Joints
-// and force elements are written against markers only (DESIGN.md 2).
+// and force elements are written against markers only (docs/design.md 2).
 struct Marker {
   int body = kGroundIndex;
   Vec3 position = Vec3::Zero();

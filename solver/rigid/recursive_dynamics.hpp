@@ -1,4 +1,4 @@
-// The recursive formulation in joint coordinates (DESIGN.md 3):
+// The recursive formulation in joint coordinates (docs/design.md 3):
 // a forward loop over the tree for poses, velocities Y = B qdot and
 // accelerations Ydot = B qddot + Bdot qdot, and a backward loop that
 // accumulates each subtree's Newton-Euler wrench, which gives both the

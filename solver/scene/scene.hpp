@@ -94,7 +94,7 @@ struct JointSpec {
   bool isVirtual = false;    // a virtual body's free joint to ground, made by the assembly
 };
 
-// A flexible body joint (DESIGN.md 3): welds a virtual body to a flexible
+// A flexible body joint (docs/design.md 3): welds a virtual body to a flexible
 // node with 6 constraint rows; its multipliers are the force and torque it
 // passes. Made by the assembly with the virtual body.
 struct FlexibleBodyJointSpec {

@@ -211,7 +211,7 @@ TEST_F(CoupledSystem, ConstraintAccelerationTermMatchesSecondDifferences) {
       << (predicted - second).cwiseAbs().maxCoeff();
 }
 
-// The scaled Newton matrix (DESIGN.md 3) stays well conditioned as h -> 0:
+// The scaled Newton matrix (docs/design.md 3) stays well conditioned as h -> 0:
 // it tends to [M Phi_q^T; Phi_q 0], regular although the virtual bodies are
 // massless (their motion is fixed by the welds). Without the scaling the
 // stiffness blocks would grow as 1/h^2 against the constraint rows.
