@@ -85,20 +85,6 @@ Eigen::MatrixXd Simulation::constraintJacobian(const Configuration& q, const Vec
   return J;
 }
 
-// Phi_q v + Phi_t at the current state (zero when the velocities meet the
-// constraints); Phi_t by central differences in time.
-VectorXd Simulation::velocityConstraints() {
-  const int n = system_.velocityCount(), m = system_.constraintCount();
-  auto constraints = [&](double t) {
-    VectorXd r, phi;
-    system_.residual(t, state_.q, state_.v, VectorXd::Zero(n), VectorXd::Zero(m), r, phi);
-    return phi;
-  };
-  const double dt = 1e-6 * std::max(1.0, std::abs(state_.t));
-  const VectorXd phiRate = (constraints(state_.t + dt) - constraints(state_.t - dt)) / (2 * dt);
-  return constraintJacobian(state_.q, state_.v) * state_.v + phiRate;
-}
-
 // The owners of constraint rows, each named once: "cut joint 'a', drive of
 // joint 'b' and 3 more".
 std::string Simulation::constraintOwners(const std::vector<int>& rows) const {
@@ -174,7 +160,7 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
     return false;
   }
   const Eigen::MatrixXd J = jacobian(state_.q, state_.v);
-  const VectorXd dv = -leastChange(J, velocityConstraints());
+  const VectorXd dv = -leastChange(J, system_.velocityConstraints(state_.t, state_.q, state_.v));
   state_.v += dv;
   if (notes) {
     for (const Joint& j : system_.model().joints) {
@@ -315,7 +301,7 @@ AdvanceResult Simulation::doStep(double t, double H) {
     // generalized-alpha meets them only to O(h^2), and a projection at every
     // change of a force input would alter the motion.)
     if (driveRateChanged_) {
-      const VectorXd violation = velocityConstraints();
+      const VectorXd violation = system_.velocityConstraints(state_.t, state_.q, state_.v);
       if (violation.cwiseAbs().maxCoeff() > scene_.solver.tolerance)
         TimeStepper::jumpVelocities(system_, state_, violation);
     }

@@ -98,7 +98,6 @@ class Simulation {
   std::string constraintOwner(int row) const;
   std::string constraintOwners(const std::vector<int>& rows) const;
   Eigen::MatrixXd constraintJacobian(const Configuration& q, const VectorXd& v);
-  VectorXd velocityConstraints();
   std::string redundantConstraints(const Configuration& q, const VectorXd& v, bool vanishing);
   double readFlexible(const Quantity& q);
   void setInput(double& slot, double value);

@@ -187,10 +187,9 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
   // the substep's own increment, to which the corrections add (a rigid
   // tree resolves far below its coordinates' ulps).
   const double epsilon = std::numeric_limits<double>::epsilon();
-  const double coordinateFloor =
-      elasticCoordinates_
-          ? 256.0 * epsilon * std::max(1.0, s.q.scalars.size() ? s.q.scalars.cwiseAbs().maxCoeff() : 0.0)
-          : 0.0;
+  const double coordinateUlps =
+      256.0 * epsilon * std::max(1.0, s.q.scalars.size() ? s.q.scalars.cwiseAbs().maxCoeff() : 0.0);
+  const double coordinateFloor = elasticCoordinates_ ? coordinateUlps : 0.0;
   // The tolerance holds for the error left in q (m, rad), v (per s) and
   // vdot (per s^2); see the convergence test below.
   const double target = options_.tolerance * std::min({1.0, 1.0 / gammaPrime, 1.0 / betaPrime});
@@ -282,8 +281,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     // noise too: the noise estimate is only an estimate (Bricard's
     // corrections hover at 2-4e-16 against an estimated 2e-16).
     const bool noise = k > 0 && withFreshMatrix >= 1 && rho > 0.5 &&
-                       size <= std::max(256.0 * epsilon * std::max(1.0, s.q.scalars.size() ? s.q.scalars.cwiseAbs().maxCoeff() : 0.0),
-                                        16.0 * correctionNoise_);
+                       size <= std::max(coordinateUlps, 16.0 * correctionNoise_);
     const bool small = remaining <= resolved || size <= 0.01 * target || belowFloor || noise;
     if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= std::max(options_.tolerance, phiFloor))) {
       lastRate_ = k > 0 ? rho : 1.0;
