@@ -130,11 +130,8 @@ fmi2Status Instance::setupExperiment(bool, double, double startTime, bool stopTi
 
 // Scene with the current parameter values -> Simulation at startTime.
 bool Instance::buildSimulation(const char* function) {
-  std::map<std::string, double> userValues;
-  for (std::size_t i = 0; i < table_.size(); ++i)
-    if (table_[i].quantity.kind == QuantityKind::UserParameter) userValues[table_[i].name] = values_[i];
   try {
-    Scene scene = parseScene(sceneText_, userValues);
+    Scene scene = parseScene(sceneText_, userParameterValues());
     for (std::size_t i = 0; i < table_.size(); ++i)
       if (table_[i].causality == Causality::Parameter) setSceneParameter(scene, table_[i].quantity, values_[i]);
     simulation_ = std::make_unique<Simulation>(scene);
@@ -285,6 +282,13 @@ bool Instance::checkValue(const Variable& v, double value, std::string& why) con
   }
 }
 
+std::map<std::string, double> Instance::userParameterValues() const {
+  std::map<std::string, double> values;
+  for (std::size_t i = 0; i < table_.size(); ++i)
+    if (table_[i].quantity.kind == QuantityKind::UserParameter) values[table_[i].name] = values_[i];
+  return values;
+}
+
 bool Instance::checkScene(const std::map<std::string, double>& userValues, std::string& why) const {
   try {
     Simulation check(parseScene(sceneText_, userValues));
@@ -301,10 +305,7 @@ fmi2Status Instance::setReal(const fmi2ValueReference vr[], std::size_t n, const
   // Every reference and value is checked before any is applied: a refused
   // call changes nothing.
   std::vector<std::size_t> index(n);
-  std::map<std::string, double> userValues;
   std::string userChanges;
-  for (std::size_t i = 0; i < table_.size(); ++i)
-    if (table_[i].quantity.kind == QuantityKind::UserParameter) userValues[table_[i].name] = values_[i];
   for (std::size_t i = 0; i < n; ++i) {
     const auto it = byReference_.find(vr[i]);
     if (it == byReference_.end())
@@ -317,14 +318,19 @@ fmi2Status Instance::setReal(const fmi2ValueReference vr[], std::size_t n, const
     std::string why;
     if (!checkValue(v, value[i], why))
       return fail("fmi2SetReal", "'" + v.name + "' = " + numberText(value[i]) + ": " + why);
-    if (v.quantity.kind == QuantityKind::UserParameter) {
-      userValues[v.name] = value[i];
+    if (v.quantity.kind == QuantityKind::UserParameter)
       userChanges += (userChanges.empty() ? "'" : ", '") + v.name + "' = " + numberText(value[i]);
-    }
     index[i] = it->second;
   }
-  std::string why;
-  if (!userChanges.empty() && !checkScene(userValues, why)) return fail("fmi2SetReal", userChanges + ": " + why);
+  // User parameters of the call are checked together against the scene
+  // (only then: inputs set at every communication point cost no scene check).
+  if (!userChanges.empty()) {
+    std::map<std::string, double> userValues = userParameterValues();
+    for (std::size_t i = 0; i < n; ++i)
+      if (table_[index[i]].quantity.kind == QuantityKind::UserParameter) userValues[table_[index[i]].name] = value[i];
+    std::string why;
+    if (!checkScene(userValues, why)) return fail("fmi2SetReal", userChanges + ": " + why);
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const Variable& v = table_[index[i]];
     values_[index[i]] = value[i];

@@ -63,6 +63,8 @@ class Instance {
   // One value of a parameter or input on its own (user parameters: checkScene).
   bool checkValue(const Variable& v, double value, std::string& why) const;
   // The scene stays valid with these user parameter values.
+  // The user parameters' present values, by name (what parseScene takes).
+  std::map<std::string, double> userParameterValues() const;
   bool checkScene(const std::map<std::string, double>& userValues, std::string& why) const;
   double timeRoundOff(double t, double now) const;
   double currentTime() const;
