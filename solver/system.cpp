@@ -8,6 +8,7 @@
 #include "rigid/force_elements.hpp"
 #include "rigid/joint_motion.hpp"
 #include "rigid/recursive_dynamics.hpp"
+#include "system_poses.hpp"
 
 namespace mfbd {
 
@@ -166,26 +167,6 @@ void System::jointForces(const Configuration& q, const VectorXd& v, VectorXd& ta
     if (j.actuated) t += jointInputs_.segment(j.inputOffset, j.dofs);
   }
 }
-
-namespace {
-
-JointConstraint constraintOf(const Joint& j) {
-  return {j.type, {j.parentMarker.position, j.parentMarker.orientation},
-          {j.childMarker.position, j.childMarker.orientation}};
-}
-
-// Pose of a body's centre-of-mass frame; ground is the identity.
-BodyPose poseOf(const Data& data, int body) {
-  if (body == kGroundIndex) return {Vec3::Zero(), Mat3::Identity()};
-  return {data.body[body].position, data.body[body].orientation};
-}
-
-BodyTwist twistOf(const Data& data, int body) {
-  if (body == kGroundIndex) return {Vec3::Zero(), Vec3::Zero()};
-  return {data.body[body].velocity, data.body[body].angularVelocity};
-}
-
-}  // namespace
 
 // Joint-space residual B^T (M Ydot - Q + Phi_Z^T lambda) - tau: the cut
 // joints' forces -Phi_Z^T lambda enter the backward loop as applied wrenches.
@@ -385,29 +366,6 @@ VectorXd System::velocityConstraints(double t, const Configuration& q, const Vec
   return violation;
 }
 
-int System::auxiliaryCount(double cM) const {
-  return recursiveMatrix_ && cM != 0.0 ? 18 * int(model_.bodies.size()) : 0;
-}
-
-// Body by body from the leaves in, each body's acceleration and velocity
-// variations pivoting on their recursion rows (unit pivots), its wrench on
-// its balance row (unit),
-// then its joint rates on their own rows (the articulated inertia S^T H S
-// by then): the elimination of the articulated-body recursion, no fill
-// beyond each body's parent. Multipliers and flexible DOFs follow.
-std::vector<std::pair<int, int>> System::pivotOrder(double cM) const {
-  std::vector<std::pair<int, int>> order;
-  if (auxiliaryCount(cM) == 0) return order;
-  for (int i = int(model_.bodies.size()) - 1; i >= 0; --i) {
-    for (int d = 0; d < 6; ++d) order.emplace_back(accelerationUnknown(i) + d, accelerationUnknown(i) + d);
-    for (int d = 0; d < 6; ++d) order.emplace_back(wrenchUnknown(i) + d, bodyUnknown(i) + d);
-    for (int d = 0; d < 6; ++d) order.emplace_back(bodyUnknown(i) + d, wrenchUnknown(i) + d);
-    const Joint& jt = model_.joints[model_.bodies[i].inboardJoint];
-    for (int d = 0; d < jt.dofs; ++d) order.emplace_back(jt.velocityOffset + d, jt.velocityOffset + d);
-  }
-  return order;
-}
-
 void System::tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                      const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                      Triplets& constraintJacobian) {
@@ -445,162 +403,6 @@ double System::tangentCost() const {
   if (!model_.bodies.empty()) rigid = recursiveMatrix_ ? 3.0 : double(tangentColours_.size() + 1);
   const double flexible = model_.flexible.elements.empty() ? 0.0 : 16.0;
   return std::max({1.0, rigid, flexible});
-}
-
-// The recursive formulation's own Newton matrix, sparse and O(n) for a tree
-// of n bodies where the joint-space B^T M B is dense (a chain). Besides the
-// joint-rate corrections x it carries, per body, the variations y of its
-// pose and velocity ([dr; dphi], world, centre of mass: velocity
-// variations are cC y), w of its acceleration, and z of the wrench its
-// inboard joint passes to its subtree:
-//   x rows:  A x + S^T z                                   = r
-//   y rows:  cM M w + H y - (I - P)^T z + Phi_Z^T dl        = 0  (wrench balance)
-//   z rows:  S x - (I - P) y                               = 0  (y = T y_parent + S x)
-//   w rows:  S x - (I - P) w + cC (D_p y_parent + D_x x)   = 0  (accelerations)
-// with T the rigid transfer from the parent's centre of mass, A the joint
-// springs and dampers, H = cC C + cK K of inertia (gyroscopic), force
-// elements and cut joints at body level, and D the derivatives of the
-// acceleration recursion's rate terms (Coriolis, centripetal) with respect
-// to the parent's velocity and the joint rates, and the geometric stiffness
-// of the transmitted wrenches z (joint axes turning, levers stretching).
-// Eliminating y, w and z leaves the joint-space matrix: mass and damping
-// exactly, stiffness exactly where nothing accelerates; left out is the
-// turning of S and T acting on accelerations (relative size h^2 |a| / L):
-// Newton converges linearly there, to the same answer (the residual is
-// exact). Statics (cM = 0) uses the joint space (no auxiliary unknowns).
-void System::recursiveTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
-                              const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
-                              Triplets& constraintJacobian) {
-  const int nb = int(model_.bodies.size());
-  // The residual's backward loop: the subtree wrenches z the geometric
-  // terms below act on (and the kinematics of q).
-  VectorXd r, phi;
-  rigidResidual(t, q, v, vdot, lambda, r, phi);
-  Configuration moved = q;  // joint coordinates perturbed one block at a time
-  // Blocks are written with every entry that can be nonzero, zeros
-  // included, so that the pattern never changes: in full where they couple
-  // poses, by their structure where that is fixed (unit diagonals, the
-  // rigid transfer's lever arm, a body's mass and rotary inertia).
-  auto block = [&](int row, int col, const Mat6& M) {
-    for (int k = 0; k < 6; ++k)
-      for (int i = 0; i < 6; ++i) iteration.emplace_back(row + i, col + k, M(i, k));
-  };
-  auto diagonal = [&](int row, int col, double value) {
-    for (int i = 0; i < 6; ++i) iteration.emplace_back(row + i, col + i, value);
-  };
-  auto corner = [&](int row, int col, const Mat3& M) {  // the 3 x 3 block at (row, col)
-    for (int k = 0; k < 3; ++k)
-      for (int i = 0; i < 3; ++i) iteration.emplace_back(row + i, col + k, M(i, k));
-  };
-  for (int i = 0; i < nb; ++i) {
-    const Body& b = model_.bodies[i];
-    const BodyKinematics& k = data_.body[i];
-    const Mat3 J = k.orientation * b.inertia * k.orientation.transpose();
-    const Vec3& w = k.angularVelocity;
-    const Mat3 gyroscopic = skew(w) * J - skew(J * w);  // d(w x J w)/dw
-    // d(J alpha + w x J w)/dphi, J = A J0 A^T turned by dphi.
-    const Mat3 turning =
-        J * skew(k.angularAcceleration) - skew(J * k.angularAcceleration) + skew(w) * (J * skew(w) - skew(J * w));
-    // cM M on the acceleration; cC gyroscopic + cK turning on the pose.
-    for (int d = 0; d < 3; ++d) iteration.emplace_back(bodyUnknown(i) + d, accelerationUnknown(i) + d, cM * b.mass);
-    corner(bodyUnknown(i) + 3, accelerationUnknown(i) + 3, cM * J);
-    corner(bodyUnknown(i) + 3, bodyUnknown(i) + 3, cC * gyroscopic + cK * turning);
-    diagonal(bodyUnknown(i), wrenchUnknown(i), -1.0);
-    diagonal(wrenchUnknown(i), bodyUnknown(i), -1.0);
-    diagonal(accelerationUnknown(i), accelerationUnknown(i), -1.0);
-    const BiasRateDerivatives D = biasRateDerivatives(model_, data_, q, v, i);
-    if (b.parent != kGroundIndex) {
-      // T = [I, -skew(dr); 0, I]: v_i = v_p + w_p x dr, and so for accelerations.
-      const Mat3 lever = -skew(k.position - data_.body[b.parent].position);
-      diagonal(wrenchUnknown(i), bodyUnknown(b.parent), 1.0);
-      corner(wrenchUnknown(i), bodyUnknown(b.parent) + 3, lever);
-      diagonal(bodyUnknown(b.parent), wrenchUnknown(i), 1.0);
-      corner(bodyUnknown(b.parent) + 3, wrenchUnknown(i), lever.transpose());
-      diagonal(accelerationUnknown(i), accelerationUnknown(b.parent), 1.0);
-      corner(accelerationUnknown(i), accelerationUnknown(b.parent) + 3, lever);
-      block(accelerationUnknown(i), bodyUnknown(b.parent), cC * D.parent);
-    }
-    const Joint& jt = model_.joints[b.inboardJoint];
-    const Matrix6X& S = data_.joint[b.inboardJoint].motionSubspace;
-    // Geometric stiffness of the transmitted wrench z_i = [F; N]: the joint
-    // axes S turn rigidly with the parent, d(S^T z)/dphi_p = S_v^T skew(F) +
-    // S_w^T skew(N), and with the joint's own coordinates (universal,
-    // spherical, free: by central differences along the retraction); the
-    // lever of T_i^T z_i in the parent's balance stretches with dr. A loaded
-    // chain's tension as a string's transverse stiffness.
-    const Vec3& F = data_.subtreeForce[i];
-    const Vec3& N = data_.subtreeTorque[i];
-    Eigen::Matrix<double, Eigen::Dynamic, 3> dParent =
-        S.topRows<3>().transpose() * skew(F) + S.bottomRows<3>().transpose() * skew(N);
-    Eigen::MatrixXd dOwn(jt.dofs, jt.dofs);
-    {
-      const Mat3 AP = (b.parent == kGroundIndex ? Mat3::Identity() : data_.body[b.parent].orientation) *
-                      jt.parentMarker.orientation;
-      auto transmitted = [&](const Configuration& qj) {  // S(q)^T z at fixed parent pose
-        const JointMotion m = jointMotion(jt, qj, v.segment(jt.velocityOffset, jt.dofs));
-        const Mat3 AC = AP * m.rotation;
-        const Vec3 pC = AC * jt.childMarker.orientation.transpose() * jt.childMarker.position;
-        const Matrix3X Sw = AC * m.Hw;
-        const Matrix3X Sv = AP * m.Hv + skew(pC) * Sw;
-        return VectorXd(Sv.transpose() * F + Sw.transpose() * N);
-      };
-      // Only this joint's coordinate block moves: perturbed in place in one
-      // copy of q (a copy per rate would make the tangent O(n^2)).
-      const double eps = 1e-6;
-      for (int d = 0; d < jt.dofs; ++d) {
-        const CoordinateBlock& block = model_.blocks[blockOfRate_[jt.velocityOffset + d]];
-        VectorXd column[2];
-        for (int side = 0; side < 2; ++side) {
-          const bool rotation = block.rotation >= 0;
-          const Mat3 savedRotation = rotation ? moved.rotations[block.rotation] : Mat3::Identity();
-          const VectorXd savedScalars = rotation ? VectorXd() : VectorXd(moved.scalars.segment(block.scalarOffset, block.size));
-          retractBlock(block, moved,
-                       VectorXd::Unit(block.size, jt.velocityOffset + d - block.velocityOffset) * (side ? -eps : eps));
-          column[side] = transmitted(moved);
-          if (rotation) moved.rotations[block.rotation] = savedRotation;
-          else moved.scalars.segment(block.scalarOffset, block.size) = savedScalars;
-        }
-        dOwn.col(d) = (column[0] - column[1]) / (2.0 * eps);
-      }
-    }
-    if (b.parent != kGroundIndex) {
-      const Mat3 lever = cK * skew(F);  // d(dr x F) = -skew(F) (dr_i - dr_p)
-      corner(bodyUnknown(b.parent) + 3, bodyUnknown(i), -lever);
-      corner(bodyUnknown(b.parent) + 3, bodyUnknown(b.parent), lever);
-    }
-    for (int d = 0; d < jt.dofs; ++d)
-      for (int e = 0; e < jt.dofs; ++e)
-        iteration.emplace_back(jt.velocityOffset + d, jt.velocityOffset + e, cK * dOwn(d, e));
-    for (int d = 0; d < jt.dofs; ++d) {
-      const int x = jt.velocityOffset + d;
-      if (b.parent != kGroundIndex)
-        for (int c = 0; c < 3; ++c) iteration.emplace_back(x, bodyUnknown(b.parent) + 3 + c, cK * dParent(d, c));
-      for (int r = 0; r < 6; ++r) {
-        iteration.emplace_back(wrenchUnknown(i) + r, x, S(r, d));
-        iteration.emplace_back(accelerationUnknown(i) + r, x, S(r, d) + cC * D.rates(r, d));
-        iteration.emplace_back(x, wrenchUnknown(i) + r, S(r, d));
-      }
-      // Joint springs and dampers act on the joint's own rates.
-      double a = cC * (jt.damping + jt.springDamping);
-      if (d == 0) a += cK * jt.springStiffness;
-      iteration.emplace_back(x, x, a);
-    }
-  }
-  forceElementTangent(cC, cK, iteration);
-  if (cK != 0.0 && lambda.size() > 0)
-    for (const Joint& j : model_.joints) {
-      if (!j.cut) continue;
-      const int parent = j.parentMarker.body, child = j.childMarker.body;
-      const GeometricStiffness K =
-          constraintGeometricStiffness(constraintOf(j), poseOf(data_, parent), poseOf(data_, child),
-                                       lambda.segment(j.constraintOffset, mfbd::constraintCount(j.type)));
-      const int ends[2] = {parent, child};
-      for (int a = 0; a < 2; ++a)
-        for (int c = 0; c < 2; ++c)
-          if (ends[a] != kGroundIndex && ends[c] != kGroundIndex)
-            block(bodyUnknown(ends[a]), bodyUnknown(ends[c]), cK * K.block<6, 6>(6 * a, 6 * c));
-    }
-  constraintRows(true, constraintJacobian);
 }
 
 // Body-level stiffness and damping of the force elements, -dQ/d(pose) and
