@@ -175,7 +175,7 @@ void System::recursiveTangent(double t, const Configuration& q, const VectorXd& 
       iteration.emplace_back(x, x, a);
     }
   }
-  forceElementTangent(cC, cK, iteration);
+  forceElementTangent(t, cC, cK, iteration);
   if (cK != 0.0 && lambda.size() > 0)
     for (const Joint& j : model_.joints) {
       if (!j.cut) continue;

@@ -159,9 +159,26 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
               numberText(std::abs(phi[worst])) + " after projection (is the loop closable?)";
     return false;
   }
-  const Eigen::MatrixXd J = jacobian(state_.q, state_.v);
+  // Velocities: the least change of the rates the scene does not keep
+  // (initial.keep_rates): their columns alone enter the projection.
+  Eigen::MatrixXd J = jacobian(state_.q, state_.v);
+  std::vector<std::string> kept;
+  for (const Joint& j : system_.model().joints)
+    if (j.keepRates && !j.cut) {
+      J.middleCols(j.velocityOffset, j.dofs).setZero();
+      kept.push_back("'" + j.name + "'");
+    }
   const VectorXd dv = -leastChange(J, system_.velocityConstraints(state_.t, state_.q, state_.v));
   state_.v += dv;
+  const VectorXd left = system_.velocityConstraints(state_.t, state_.q, state_.v);
+  if (!kept.empty() && left.cwiseAbs().maxCoeff(&worst) > std::max(tol, 1e-9 * std::max(1.0, state_.v.norm()))) {
+    std::string joints = kept.front();
+    for (std::size_t i = 1; i < kept.size(); ++i) joints += ", " + kept[i];
+    message = "cannot keep the initial rates of joint " + joints + " (initial.keep_rates): the velocity constraint of " +
+              constraintOwner(worst) + " is then violated by " + numberText(std::abs(left[worst])) +
+              "; keep fewer rates, or rates the constraints allow";
+    return false;
+  }
   if (notes) {
     for (const Joint& j : system_.model().joints) {
       if (j.cut || j.dofs == 0 || j.scalarOffset < 0) continue;

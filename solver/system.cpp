@@ -177,7 +177,7 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
     data_.appliedForce[i] = model_.bodies[i].mass * model_.gravity;
     data_.appliedTorque[i].setZero();
   }
-  applyForceElements(model_.forces, forceInputs_, data_);
+  applyForceElements(model_.forces, forceInputs_, t, data_);
   phi.setZero(model_.constraintCount);
   constraintLengthScale_ = 1.0;
   for (const Joint& j : model_.joints) {
@@ -408,12 +408,12 @@ double System::tangentCost() const {
 // Body-level stiffness and damping of the force elements, -dQ/d(pose) and
 // -dQ/d(twist) of each element's wrenches, by finite differences of that
 // element alone (6 evaluations per body it touches).
-void System::forceElementTangent(double cC, double cK, Triplets& iteration) {
+void System::forceElementTangent(double t, double cC, double cK, Triplets& iteration) {
   if (cC == 0.0 && cK == 0.0) return;
   const double eps = 1e-7;
   for (const ForceElement& e : model_.forces) {
     const int ends[2] = {e.marker1.body, e.kind == ForceElement::Kind::AppliedForce ? kGroundIndex : e.marker2.body};
-    const ForceElementWrenches w0 = forceElementWrenches(e, forceInputs_, data_);
+    const ForceElementWrenches w0 = forceElementWrenches(e, forceInputs_, t, data_);
     for (int side = 0; side < 2; ++side) {
       const int moved = ends[side];
       if (moved == kGroundIndex) continue;
@@ -429,7 +429,7 @@ void System::forceElementTangent(double cC, double cK, Triplets& iteration) {
         }
         if (d < 3) k.velocity[d] += twist;
         else k.angularVelocity[d - 3] += twist;
-        const ForceElementWrenches w1 = forceElementWrenches(e, forceInputs_, data_);
+        const ForceElementWrenches w1 = forceElementWrenches(e, forceInputs_, t, data_);
         k = saved;
         const double factor = -(cK != 0.0 ? cK : cC) / eps;
         for (int on = 0; on < 2; ++on) {

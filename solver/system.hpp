@@ -88,7 +88,7 @@ class System : public Dynamics {
   void weldForcesOnNodes(VectorXd& r) const;
   void recursiveTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                         double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
-  void forceElementTangent(double cC, double cK, Triplets& iteration);
+  void forceElementTangent(double t, double cC, double cK, Triplets& iteration);
   void constraintRows(bool bodyColumns, Triplets& constraintJacobian);
   void weldTangent(const VectorXd& lambda, double cK, bool bodyColumns, Triplets& iteration) const;
   // Indices of body i's variations among the Newton matrix's unknowns

@@ -108,7 +108,7 @@ void makeVirtualBodies(Scene& scene) {
     if (j.parentNode) parent = resolve(scene, *j.parentNode);
     if (j.childNode) child = resolve(scene, *j.childNode);
     if (!j.positionGiven) j.position = parent ? parent->position : child->position;
-    const Mat3 frame = frameFromZAxis(j.axis);
+    const Mat3& frame = j.frame;
     if (parent) j.parent = maker.make(j.name, "parent", *parent, j.position, frame, true);
     if (child) j.child = maker.make(j.name, "child", *child, j.position, frame, j.cut);
     j.parentNode.reset();

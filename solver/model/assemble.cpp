@@ -117,8 +117,9 @@ Model assemble(const Scene& scene) {
     j.dofs = int(jointDofs(spec.type));
     j.cut = spec.cut;
     j.actuated = spec.torqueInput;
+    j.keepRates = spec.keepRates;
     j.damping = spec.damping;
-    const WorldFrame jointFrame{spec.position, frameFromZAxis(spec.axis)};
+    const WorldFrame jointFrame{spec.position, spec.frame};
     const int parent = indexOf(spec.parent), child = indexOf(spec.child);
     j.parentMarker = markerOn(parent, frameOf(parent), jointFrame);
     j.childMarker = markerOn(child, frameOf(child), jointFrame);
@@ -178,6 +179,10 @@ Model assemble(const Scene& scene) {
       default:
         e.kind = ForceElement::Kind::AppliedForce;
         e.bodyFrame = f.bodyFrame;
+        e.force = f.force;
+        e.torque = f.torque;
+        e.scale = f.scale;
+        if (!f.input) break;
         e.inputOffset = model.forceInputCount;
         model.forceInputCount += 6;
         break;

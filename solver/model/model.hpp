@@ -46,6 +46,7 @@ struct Joint {
   int rotation = -1;       // its stored rotation in Configuration::rotations
   bool cut = false;
   bool actuated = false;   // generalized force input along its DOFs
+  bool keepRates = false;  // assembly keeps its initial rates (others adjust to the constraints)
   int inputOffset = -1;    // into the joint input vector: forces along its DOFs, or its drive rate
   double damping = 0.0;    // tunable
   int constraintOffset = -1;  // cut joints and drives: first row in Phi (and lambda)
@@ -64,6 +65,8 @@ struct ForceElement {
   double stiffness = 0.0, damping = 0.0, freeLength = 0.0;  // spring-damper
   Vec6 bushingStiffness = Vec6::Zero(), bushingDamping = Vec6::Zero();  // in marker1's frame
   bool bodyFrame = false;       // applied force: components in marker1's frame (else world)
+  Vec3 force = Vec3::Zero(), torque = Vec3::Zero();  // applied force without inputs: times scale(t)
+  TimeFunction scale;
   int inputOffset = -1;         // actuator force (1) or applied force and torque (6)
 };
 

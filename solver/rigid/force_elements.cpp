@@ -51,7 +51,7 @@ SpringState springState(const ForceElement& e, const VectorXd& inputs, const Dat
   return s;
 }
 
-ForceElementWrenches forceElementWrenches(const ForceElement& e, const VectorXd& inputs, const Data& data) {
+ForceElementWrenches forceElementWrenches(const ForceElement& e, const VectorXd& inputs, double t, const Data& data) {
   ForceElementWrenches w;
   const MarkerState a = markerState(e.marker1, data);
   switch (e.kind) {
@@ -83,7 +83,9 @@ ForceElementWrenches forceElementWrenches(const ForceElement& e, const VectorXd&
       break;
     }
     case ForceElement::Kind::AppliedForce: {
-      Vec3 f = inputs.segment<3>(e.inputOffset), n = inputs.segment<3>(e.inputOffset + 3);
+      const double scale = e.inputOffset < 0 ? e.scale(t) : 0.0;
+      Vec3 f = e.inputOffset < 0 ? Vec3(scale * e.force) : Vec3(inputs.segment<3>(e.inputOffset));
+      Vec3 n = e.inputOffset < 0 ? Vec3(scale * e.torque) : Vec3(inputs.segment<3>(e.inputOffset + 3));
       if (e.bodyFrame) {
         f = a.orientation * f;
         n = a.orientation * n;
@@ -95,9 +97,9 @@ ForceElementWrenches forceElementWrenches(const ForceElement& e, const VectorXd&
   return w;
 }
 
-void applyForceElements(const std::vector<ForceElement>& elements, const VectorXd& inputs, Data& data) {
+void applyForceElements(const std::vector<ForceElement>& elements, const VectorXd& inputs, double t, Data& data) {
   for (const ForceElement& e : elements) {
-    const ForceElementWrenches w = forceElementWrenches(e, inputs, data);
+    const ForceElementWrenches w = forceElementWrenches(e, inputs, t, data);
     for (const auto& [body, wrench] : {std::pair{e.marker1.body, w.onBody1}, std::pair{e.marker2.body, w.onBody2}}) {
       if (body == kGroundIndex) continue;
       data.appliedForce[body] += wrench.head<3>();

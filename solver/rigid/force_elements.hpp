@@ -1,6 +1,6 @@
 // Force elements between bodies, written against markers (points and frames
 // fixed in bodies): a translational spring-damper-actuator, a 6-DOF bushing,
-// and an applied force and torque from FMI inputs. Each turns the two
+// and an applied force and torque (given functions of time or FMI inputs). Each turns the two
 // markers' poses and velocities into wrenches on the bodies (world, about
 // each body's centre of mass). Rotational spring-dampers act in joint space
 // (joint forces, like joint damping).
@@ -18,11 +18,12 @@ namespace mfbd {
 struct ForceElementWrenches {
   Vec6 onBody1 = Vec6::Zero(), onBody2 = Vec6::Zero();
 };
-ForceElementWrenches forceElementWrenches(const ForceElement& e, const VectorXd& inputs, const Data& data);
+ForceElementWrenches forceElementWrenches(const ForceElement& e, const VectorXd& inputs, double t, const Data& data);
 
 // Adds every element's wrenches to data.appliedForce / appliedTorque (after
-// forwardKinematics); `inputs` holds the force-element inputs.
-void applyForceElements(const std::vector<ForceElement>& elements, const VectorXd& inputs, Data& data);
+// forwardKinematics); `inputs` holds the force-element inputs, t is the time
+// of the applied forces given as functions of time.
+void applyForceElements(const std::vector<ForceElement>& elements, const VectorXd& inputs, double t, Data& data);
 
 // Length, rate and tension of a spring-damper (for outputs).
 struct SpringState {

@@ -224,6 +224,10 @@ class Field {
   const std::map<std::string, double>& params_;
 };
 
+// A body's or element's orientation: quaternion [w,x,y,z], z_axis (+ x_axis)
+// or rotation_vector, exactly one (parse.cpp).
+Mat3 parseOrientation(const Field& f);
+
 // A joint's or force element's end: a body name ("ground" allowed), or a
 // flexible node {"flexible": name, "node": i} or {"flexible": name, "at": s}
 // (then `body` stays empty until the assembly makes its virtual body).

@@ -32,6 +32,41 @@ const char* jointTypeName(JointType type) {
 
 namespace {
 
+// The frame with z along `z` and x along `xField`'s direction projected off z.
+Mat3 frameFromAxes(const Vec3& z, const Field& xField) {
+  const Vec3 xRaw = xField.direction();
+  const Vec3 x = xRaw - xRaw.dot(z) * z;
+  if (x.norm() < 1e-6) xField.fail("expected a direction not parallel to the z axis");
+  Mat3 A;
+  A.col(0) = x.normalized();
+  A.col(2) = z;
+  A.col(1) = z.cross(A.col(0));
+  return A;
+}
+
+}  // namespace
+
+Mat3 parseOrientation(const Field& f) {
+  f.expectObject({"quaternion", "z_axis", "x_axis", "rotation_vector"}, {});
+  const int given = f.has("quaternion") + f.has("z_axis") + f.has("rotation_vector");
+  if (given != 1) f.fail("expected exactly one of quaternion [w,x,y,z], z_axis (+ x_axis), rotation_vector");
+  if (f.has("x_axis") && !f.has("z_axis")) f.at("x_axis").fail("x_axis goes with z_axis");
+  if (f.has("quaternion")) {
+    const Field q = f.at("quaternion");
+    const std::vector<double> v = q.numbers();
+    if (v.size() != 4) q.fail("expected 4 numbers [w, x, y, z], got " + std::to_string(v.size()));
+    const Eigen::Vector4d wxyz(v[0], v[1], v[2], v[3]);
+    const double norm = wxyz.stableNorm();  // no overflow for [1e20, 0, 0, 0]
+    if (norm == 0.0) q.fail("expected a non-zero quaternion");
+    return Quat(v[0] / norm, v[1] / norm, v[2] / norm, v[3] / norm).toRotationMatrix();
+  }
+  if (f.has("rotation_vector")) return expSO3(f.at("rotation_vector").vec3());
+  const Vec3 z = f.at("z_axis").direction();
+  return f.has("x_axis") ? frameFromAxes(z, f.at("x_axis")) : frameFromZAxis(z);
+}
+
+namespace {
+
 // The scene's name is the FMU's modelIdentifier: a C identifier (what
 // Field::identifier accepts) that names the binary in the archive,
 // binaries/<platform>/<name>.so or .dll. Importers extract into a
@@ -68,31 +103,16 @@ std::vector<ParameterSpec> parseParameters(const Field& f, const std::map<std::s
   return out;
 }
 
-Mat3 parseOrientation(const Field& f) {
-  f.expectObject({"quaternion", "z_axis", "x_axis", "rotation_vector"}, {});
-  const int given = f.has("quaternion") + f.has("z_axis") + f.has("rotation_vector");
-  if (given != 1) f.fail("expected exactly one of quaternion [w,x,y,z], z_axis (+ x_axis), rotation_vector");
-  if (f.has("x_axis") && !f.has("z_axis")) f.at("x_axis").fail("x_axis goes with z_axis");
-  if (f.has("quaternion")) {
-    const Field q = f.at("quaternion");
-    const std::vector<double> v = q.numbers();
-    if (v.size() != 4) q.fail("expected 4 numbers [w, x, y, z], got " + std::to_string(v.size()));
-    const Eigen::Vector4d wxyz(v[0], v[1], v[2], v[3]);
-    const double norm = wxyz.stableNorm();  // no overflow for [1e20, 0, 0, 0]
-    if (norm == 0.0) q.fail("expected a non-zero quaternion");
-    return Quat(v[0] / norm, v[1] / norm, v[2] / norm, v[3] / norm).toRotationMatrix();
+// A joint's frame: `axis` (z, default world Z) with `x_axis`, or a full
+// `orientation` as a body's.
+Mat3 parseJointFrame(const Field& f) {
+  if (f.has("orientation")) {
+    for (const char* axisField : {"axis", "x_axis"})
+      if (f.has(axisField)) f.at(axisField).fail("give either orientation or axis (+ x_axis), not both");
+    return parseOrientation(f.at("orientation"));
   }
-  if (f.has("rotation_vector")) return expSO3(f.at("rotation_vector").vec3());
-  const Vec3 z = f.at("z_axis").direction();
-  if (!f.has("x_axis")) return frameFromZAxis(z);
-  const Vec3 xRaw = f.at("x_axis").direction();
-  const Vec3 x = xRaw - xRaw.dot(z) * z;
-  if (x.norm() < 1e-6) f.at("x_axis").fail("expected a direction not parallel to z_axis");
-  Mat3 A;
-  A.col(0) = x.normalized();
-  A.col(2) = z;
-  A.col(1) = z.cross(A.col(0));
-  return A;
+  const Vec3 z = f.has("axis") ? f.at("axis").direction() : Vec3::UnitZ();
+  return f.has("x_axis") ? frameFromAxes(z, f.at("x_axis")) : frameFromZAxis(z);
 }
 
 // An inertia tensor that a body can have: symmetric, principal moments >= 0
@@ -152,8 +172,8 @@ JointType parseJointType(const Field& f) {
 }
 
 JointSpec parseJoint(const Field& f) {
-  f.expectObject({"name", "type", "parent", "child", "position", "axis", "cut", "initial", "damping", "actuated",
-                  "drive"},
+  f.expectObject({"name", "type", "parent", "child", "position", "axis", "x_axis", "orientation", "cut", "initial",
+                  "damping", "actuated", "drive"},
                  {"name", "type", "parent", "child"});
   JointSpec jt;
   jt.name = f.at("name").identifier();
@@ -165,7 +185,7 @@ JointSpec parseJoint(const Field& f) {
   if (jt.positionGiven) jt.position = f.at("position").point();
   else if (!jt.parentNode && !jt.childNode)
     throw SceneError(f.path() + ".position", "missing required field");
-  if (f.has("axis")) jt.axis = f.at("axis").direction();
+  jt.frame = parseJointFrame(f);
   if (f.has("cut")) jt.cut = f.at("cut").boolean();
   if (f.has("damping")) jt.damping = f.at("damping").nonNegative();
   if (f.has("actuated")) jt.torqueInput = f.at("actuated").boolean();
@@ -180,12 +200,13 @@ JointSpec parseJoint(const Field& f) {
   }
   if (f.has("initial")) {
     const Field init = f.at("initial");
-    init.expectObject({"coordinates", "rates"}, {});
+    init.expectObject({"coordinates", "rates", "keep_rates"}, {});
     if (init.has("coordinates")) {
       const Field q = init.at("coordinates");
       for (std::size_t i = 0; i < q.arraySize(); ++i) jt.initialCoordinates.push_back(q.at(i).coordinate());
     }
     if (init.has("rates")) jt.initialRates = init.at("rates").numbers();
+    if (init.has("keep_rates")) jt.keepRates = init.at("keep_rates").boolean();
   }
   return jt;
 }

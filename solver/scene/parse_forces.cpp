@@ -41,16 +41,22 @@ ForceSpec parseForce(const Field& f) {
     parseEnd(f.at("body1"), s.body1, s.node1);
     parseEnd(f.at("body2"), s.body2, s.node2);
     s.point1 = s.point2 = f.at("position").point();
-    if (f.has("orientation")) {
-      const Field o = f.at("orientation");
-      o.expectObject({"z_axis", "x_axis"}, {"z_axis"});
-      s.orientation = frameFromZAxis(o.at("z_axis").direction());
-    }
+    if (f.has("orientation")) s.orientation = parseOrientation(f.at("orientation"));
     s.stiffness6 = sixNumbers(f.at("stiffness"));
     if (f.has("damping")) s.damping6 = sixNumbers(f.at("damping"));
   } else if (type == "applied_force") {
-    f.expectObject({"name", "type", "body", "point", "frame"}, {"name", "body", "point"});
+    f.expectObject({"name", "type", "body", "point", "frame", "force", "torque", "scale", "input"},
+                   {"name", "body", "point"});
     s.kind = ForceSpec::Kind::AppliedForce;
+    // As a flexible body's nodal load: given (force, torque) * scale(t), or inputs.
+    const bool given = f.has("force") || f.has("torque");
+    s.input = f.has("input") ? f.at("input").boolean() : !given;
+    if (s.input && (given || f.has("scale")))
+      f.fail("an input force takes its force and torque from FMI inputs: give no force, torque or scale");
+    if (!s.input && !given) f.fail("expected a force, a torque, or \"input\": true");
+    if (f.has("force")) s.force = f.at("force").vec3();
+    if (f.has("torque")) s.torque = f.at("torque").vec3();
+    if (f.has("scale")) s.scale = f.at("scale").timeFunction("scale", false);
     parseEnd(f.at("body"), s.body1, s.node1);
     s.point1 = f.at("point").point();
     if (f.has("frame")) {

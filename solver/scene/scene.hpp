@@ -69,8 +69,10 @@ struct NodeReference {
 const char* jointTypeName(JointType type);
 
 // A joint between two bodies, placed in the design configuration: its frame
-// is at `position` with z along `axis` (both world). Joint coordinates are
-// zero in the design configuration; `initialCoordinates` move away from it.
+// is at `position` with orientation `frame` (both world; z along the scene's
+// `axis`, x along its `x_axis` or, without one, world X projected off z).
+// Joint coordinates are zero in the design configuration;
+// `initialCoordinates` move away from it.
 struct JointSpec {
   std::string name;
   JointType type = JointType::Revolute;
@@ -79,10 +81,11 @@ struct JointSpec {
   std::optional<NodeReference> parentNode, childNode;  // ends on flexible nodes
   Vec3 position = Vec3::Zero();
   bool positionGiven = true;  // may be left out when an end is a node: its position
-  Vec3 axis = Vec3::UnitZ();
+  Mat3 frame = Mat3::Identity();  // columns: the joint frame's x, y, z axes in the world
   bool cut = false;  // closes a loop (Lagrange multipliers) instead of a tree joint
   std::vector<double> initialCoordinates;  // size = joint DOF, or empty = zeros
   std::vector<double> initialRates;
+  bool keepRates = false;  // the assembly meets the velocity constraints without changing initialRates
   double damping = 0.0;    // viscous, per DOF, N m s/rad or N s/m
   bool torqueInput = false;  // an FMI input acting along the joint's DOFs
   bool driven = false;       // the (single) coordinate follows `drive`(t): a constraint row
@@ -172,7 +175,8 @@ struct FlexibleBodySpec {
 // A force element between bodies (points in world coordinates of the design
 // configuration; "ground" allowed): spring_damper (tension k (l - l0) + c
 // ldot + actuator input), bushing (6-DOF stiffness and damping in its frame),
-// applied_force (force and torque from FMI inputs, world or body frame), or
+// applied_force (force and torque, world or body frame: constant times
+// scale(t), or from FMI inputs), or
 // rotational_spring_damper on a one-DOF joint (in joint space).
 struct ForceSpec {
   enum class Kind { SpringDamper, Bushing, AppliedForce, RotationalSpringDamper };
@@ -186,6 +190,9 @@ struct ForceSpec {
   double freeLength = -1.0;             // < 0: the design distance (or angle 0)
   bool actuated = false;                // spring_damper: actuator force input
   bool bodyFrame = false;               // applied_force: components in the body frame
+  bool input = true;                    // applied_force: from FMI inputs, else (force, torque) * scale(t)
+  Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
+  TimeFunction scale;
   Vec6 stiffness6 = Vec6::Zero(), damping6 = Vec6::Zero();
 };
 

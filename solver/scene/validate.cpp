@@ -61,7 +61,7 @@ void checkJoint(const Scene& scene, std::size_t i, const std::set<std::string>& 
     throw SceneError(path + ".actuated", "joint '" + j.name + "' is a cut joint: it has no coordinates to actuate");
   if (j.cut && j.damping != 0.0)
     throw SceneError(path + ".damping", "joint '" + j.name + "' is a cut joint: it has no coordinates to damp");
-  if (j.cut && (!j.initialCoordinates.empty() || !j.initialRates.empty()))
+  if (j.cut && (!j.initialCoordinates.empty() || !j.initialRates.empty() || j.keepRates))
     throw SceneError(path + ".initial", "joint '" + j.name + "' is a cut joint: it has no coordinates of its own");
 }
 
