@@ -60,6 +60,7 @@ ALLOWED = {
     "GetIntegerStatus": {STEP_COMPLETE, STEP_FAILED, TERMINATED},
     "GetBooleanStatus": {STEP_COMPLETE, STEP_FAILED, TERMINATED},
     "GetStringStatus": {STEP_COMPLETE, STEP_FAILED, TERMINATED},
+    "GetDirectionalDerivative": GET, "GetRealOutputDerivatives": {STEP_COMPLETE, STEP_FAILED, TERMINATED, ERROR_STATE},
 }
 # Capabilities the FMU declares false: never fmi2OK.
 UNSUPPORTED = ["GetFMUstate", "SetFMUstate", "FreeFMUstate", "SerializedFMUstateSize", "SerializeFMUstate",
