@@ -175,10 +175,11 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte[], size_t, fm
     return i->unsupported("fmi2DeSerializeFMUstate", "not supported (canSerializeFMUstate=false)");
   });
 }
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference[], size_t,
-                                        const fmi2ValueReference[], size_t, const fmi2Real[], fmi2Real[]) {
-  return guarded(c, "fmi2GetDirectionalDerivative", kAny, [](Instance* i) {
-    return i->unsupported("fmi2GetDirectionalDerivative", "not supported (providesDirectionalDerivative=false)");
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown[], size_t nUnknown,
+                                        const fmi2ValueReference vKnown[], size_t nKnown, const fmi2Real dvKnown[],
+                                        fmi2Real dvUnknown[]) {
+  return guarded(c, "fmi2GetDirectionalDerivative", kGet, [&](Instance* i) {
+    return i->getDirectionalDerivative(vUnknown, nUnknown, vKnown, nKnown, dvKnown, dvUnknown);
   });
 }
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2Integer[],
@@ -187,11 +188,10 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     return i->unsupported("fmi2SetRealInputDerivatives", "not supported (canInterpolateInputs=false)");
   });
 }
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2Integer[],
-                                        fmi2Real[]) {
-  return guarded(c, "fmi2GetRealOutputDerivatives", kAny, [](Instance* i) {
-    return i->unsupported("fmi2GetRealOutputDerivatives", "not supported (maxOutputDerivativeOrder=0)");
-  });
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
+                                        const fmi2Integer order[], fmi2Real value[]) {
+  return guarded(c, "fmi2GetRealOutputDerivatives", kStepComplete | kStepFailed | kTerminated | kError,
+                 [&](Instance* i) { return i->getRealOutputDerivatives(vr, n, order, value); });
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,

@@ -50,6 +50,12 @@ class Instance {
   fmi2Status getRealStatus(int kind, fmi2Real* value);
   fmi2Status getBooleanStatus(int kind, fmi2Boolean* value);
   fmi2Status unsupported(const char* function, const char* why);
+  // fmi2GetRealOutputDerivatives and fmi2GetDirectionalDerivative (derivatives.cpp).
+  fmi2Status getRealOutputDerivatives(const fmi2ValueReference vr[], std::size_t n, const fmi2Integer order[],
+                                      fmi2Real value[]);
+  fmi2Status getDirectionalDerivative(const fmi2ValueReference unknown[], std::size_t nUnknown,
+                                      const fmi2ValueReference known[], std::size_t nKnown, const fmi2Real dvKnown[],
+                                      fmi2Real dvUnknown[]);
 
   void log(fmi2Status status, const char* category, const std::string& message) const;
   // Whether a message of this status and category reaches the logger (so
@@ -67,6 +73,9 @@ class Instance {
   std::map<std::string, double> userParameterValues() const;
   bool checkScene(const std::map<std::string, double>& userValues, std::string& why) const;
   double timeRoundOff(double t, double now) const;
+  // The variables of references of one causality, checked (derivatives.cpp).
+  bool variablesOf(const char* function, const fmi2ValueReference vr[], std::size_t n, Causality causality,
+                   std::vector<Quantity>& quantities);
   double currentTime() const;
   // Substeps, Newton iterations, factorizations and rejected substeps so far.
   std::string solverStatistics() const;

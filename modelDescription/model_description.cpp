@@ -122,27 +122,28 @@ void writeVariables(std::ostream& x, const std::vector<Variable>& table) {
   x << "  </ModelVariables>\n";
 }
 
-// Outputs: positions and velocities do not depend directly on inputs; joint
-// reactions do (through the accelerations). Initial unknowns depend on all
-// parameters and inputs (no dependencies attribute).
-void writeStructure(std::ostream& x, const std::vector<Variable>& table) {
-  std::string inputs;
-  for (std::size_t i = 0; i < table.size(); ++i)
-    if (table[i].causality == Causality::Input) inputs += (inputs.empty() ? "" : " ") + std::to_string(i + 1);
+// Outputs and the inputs they depend on at a fixed state (outputDependencies).
+// Initial unknowns depend on all parameters and inputs (no dependencies
+// attribute).
+void writeStructure(std::ostream& x, const Scene& scene, const std::vector<Variable>& table) {
   bool anyOutput = false;
   for (const Variable& v : table) anyOutput = anyOutput || v.causality == Causality::Output;
   if (!anyOutput) {  // the schema wants no empty Outputs / InitialUnknowns
     x << "  <ModelStructure/>\n";
     return;
   }
+  const Model model = assemble(scene);
   x << "  <ModelStructure>\n    <Outputs>\n";
   for (std::size_t i = 0; i < table.size(); ++i) {
     if (table[i].causality != Causality::Output) continue;
-    const QuantityKind k = table[i].quantity.kind;
-    const bool feedthrough = k == QuantityKind::JointReactionForce || k == QuantityKind::JointReactionTorque ||
-                             k == QuantityKind::JointDriveForce ||
-                             (k == QuantityKind::SpringLength && table[i].quantity.component == 2);
-    x << "      <Unknown index=\"" << i + 1 << "\" dependencies=\"" << (feedthrough ? inputs : "") << "\"/>\n";
+    std::string indices, kinds;
+    for (const Dependency& d : outputDependencies(model, table, i)) {
+      indices += (indices.empty() ? "" : " ") + std::to_string(d.input + 1);
+      kinds += (kinds.empty() ? "" : " ") + std::string(d.constantFactor ? "constant" : "dependent");
+    }
+    x << "      <Unknown index=\"" << i + 1 << "\" dependencies=\"" << indices << "\"";
+    if (!kinds.empty()) x << " dependenciesKind=\"" << kinds << "\"";
+    x << "/>\n";
   }
   x << "    </Outputs>\n    <InitialUnknowns>\n";
   for (std::size_t i = 0; i < table.size(); ++i)
@@ -150,7 +151,60 @@ void writeStructure(std::ostream& x, const std::vector<Variable>& table) {
   x << "    </InitialUnknowns>\n  </ModelStructure>\n";
 }
 
+// Outputs that the consistent accelerations or multipliers enter: they
+// follow every input that acts as a force at once.
+bool readsAccelerations(QuantityKind k) {
+  return k == QuantityKind::JointReactionForce || k == QuantityKind::JointReactionTorque ||
+         k == QuantityKind::JointDriveForce || k == QuantityKind::FlexibleBodyJointForce ||
+         k == QuantityKind::FlexibleBodyJointTorque || k == QuantityKind::ElementSectionForce;
+}
+
 }  // namespace
+
+int maxOutputDerivativeOrder(const Scene& scene) {
+  if (scene.analysis != Analysis::Dynamic) return 0;
+  return scene.flexibleBodies.empty() ? 2 : 1;
+}
+bool providesDirectionalDerivative(const Scene& scene) { return scene.analysis == Analysis::Dynamic; }
+
+// At a fixed state (q, v, t): force inputs (joint torques and forces,
+// applied forces, spring actuators, nodal loads) move the accelerations and
+// multipliers, so every output that reads those; a spring's tension is its
+// actuator force plus terms of the state; a rate-driven support's rate is
+// its node's angular velocity at once (and that node's share of the body's
+// kinetic energy, and through damping the accelerations). A rate-input
+// joint drive's rate is not part of the state at the present instant: it
+// sets the velocity jump at the next step and the coordinate's motion over
+// it, so no output depends on it without a step.
+std::vector<Dependency> outputDependencies(const Model& model, const std::vector<Variable>& table, std::size_t output) {
+  const Quantity& out = table[output].quantity;
+  const FlexibleMesh& mesh = model.flexible;
+  auto drivenNodeInput = [&](int node) {
+    const int d = mesh.nodes[node].drive;
+    return d >= 0 ? mesh.drives[d].inputOffset : -1;
+  };
+  std::vector<Dependency> deps;
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    if (table[i].causality != Causality::Input) continue;
+    const Quantity& in = table[i].quantity;
+    if (in.kind == QuantityKind::JointDriveRate) continue;
+    if (readsAccelerations(out.kind)) {
+      deps.push_back({i, false});
+    } else if (out.kind == QuantityKind::SpringLength && out.component == 2) {
+      if (in.kind == QuantityKind::ForceInput && in.index == model.forces[out.index].inputOffset) deps.push_back({i, true});
+    } else if (in.kind == QuantityKind::FlexibleInput) {
+      bool depends = false;
+      if (out.kind == QuantityKind::NodeVelocity || out.kind == QuantityKind::NodeAngularVelocity)
+        depends = drivenNodeInput(out.index) == in.index;
+      if (out.kind == QuantityKind::FlexibleEnergy && out.component == 0) {
+        const FlexibleBody& b = mesh.bodies[out.index];
+        for (int n = b.firstNode; n < b.firstNode + b.nodeCount; ++n) depends = depends || drivenNodeInput(n) == in.index;
+      }
+      if (depends) deps.push_back({i, false});
+    }
+  }
+  return deps;
+}
 
 std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>& table, const std::string& guid,
                                 const std::string& modelIdentifier, const Capabilities& caps) {
@@ -162,10 +216,12 @@ std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>&
     << " variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n"
     << "  <CoSimulation modelIdentifier=\"" << escape(modelIdentifier) << "\""
     << " needsExecutionTool=\"false\" canHandleVariableCommunicationStepSize=\"true\""
-    << " canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\""
+    << " canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"" << maxOutputDerivativeOrder(scene)
+    << "\" canRunAsynchronuously=\"false\""
     << " canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\""
     << " canGetAndSetFMUstate=\"" << flag(caps.canGetAndSetFMUstate) << "\" canSerializeFMUstate=\""
-    << flag(caps.canSerializeFMUstate) << "\" providesDirectionalDerivative=\"false\"/>\n";
+    << flag(caps.canSerializeFMUstate) << "\" providesDirectionalDerivative=\""
+    << flag(providesDirectionalDerivative(scene)) << "\"/>\n";
   writeUnits(x, table);
   x << "  <LogCategories>\n";
   for (const auto& [name, description] : logCategories())
@@ -175,7 +231,7 @@ std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>&
     << number(scene.experiment.stopTime) << "\" stepSize=\"" << number(scene.experiment.outputInterval)
     << "\"/>\n";
   writeVariables(x, table);
-  writeStructure(x, table);
+  writeStructure(x, scene, table);
   x << "</fmiModelDescription>\n";
   return x.str();
 }

@@ -361,6 +361,7 @@ void Simulation::evaluateOutputs(bool reactions) {
   // The kinematics alone: what doStep evaluates for the quaternions' signs.
   if (!reactions) {
     system_.evaluateKinematics(state_.t, state_.q, state_.v, state_.vdot);
+    outputVdot_ = state_.vdot;
     return;
   }
   VectorXd vdot = state_.vdot, lambda = state_.lambda;
@@ -377,6 +378,7 @@ void Simulation::evaluateOutputs(bool reactions) {
   if (consistentSolve && system_.constraintCount() > 0) minimumNormMultipliers(vdot, lambda);
   system_.evaluate(state_.t, state_.q, state_.v, vdot, lambda);
   outputLambda_ = lambda;
+  outputVdot_ = vdot;
 }
 
 // Redundant constraints (Bricard) leave the multipliers free along the
@@ -503,6 +505,13 @@ void Simulation::setInput(double& slot, double value) {
   inputsChangedSinceStep_ = true;
 }
 
+double& Simulation::inputSlot(const Quantity& q) {
+  if (q.kind == QuantityKind::ForceInput) return system_.forceInputs()[q.index];
+  if (q.kind == QuantityKind::FlexibleInput) return system_.flexibleInputs()[q.index];
+  const Joint& j = system_.model().joints[jointIndex_[q.index]];
+  return system_.jointInputs()[j.inputOffset + q.component];
+}
+
 bool Simulation::write(const Quantity& q, double value) {
   Model& model = system_.tunableModel();
   switch (q.kind) {
@@ -511,15 +520,14 @@ bool Simulation::write(const Quantity& q, double value) {
       inputsChangedSinceStep_ = true;
       break;
     case QuantityKind::JointForceInput:
-    case QuantityKind::JointDriveRate: {
-      const Joint& j = model.joints[jointIndex_[q.index]];
-      double& slot = system_.jointInputs()[j.inputOffset + q.component];
+    case QuantityKind::JointDriveRate:
+    case QuantityKind::ForceInput:
+    case QuantityKind::FlexibleInput: {
+      double& slot = inputSlot(q);
       if (q.kind == QuantityKind::JointDriveRate && slot != value) driveRateChanged_ = true;
       setInput(slot, value);
       break;
     }
-    case QuantityKind::ForceInput: setInput(system_.forceInputs()[q.index], value); break;
-    case QuantityKind::FlexibleInput: setInput(system_.flexibleInputs()[q.index], value); break;
     case QuantityKind::FlexibleDamping: {
       const FlexibleBody& b = model.flexible.bodies[q.index];
       for (int e = 0; e < b.elementCount; ++e) model.flexible.elements[b.firstElement + e].damping = value;

@@ -84,6 +84,16 @@ class Simulation {
   // Inputs and tunable parameters; false if q is neither.
   bool write(const Quantity& q, double value);
 
+  // Time derivatives of order 1 or 2 of outputs at the present state, the
+  // inputs held (solver/output_derivatives.cpp): kinematic ones from the
+  // state and its consistent accelerations, the rest by central
+  // differences along the motion. Dynamics only.
+  std::vector<double> outputDerivatives(const std::vector<Quantity>& outputs, const std::vector<int>& orders);
+  // Sum over j of d outputs[i] / d inputs[j] * seed[j] at the present
+  // state (q, v, t), as fmi2GetDirectionalDerivative. Dynamics only.
+  std::vector<double> inputDirectionalDerivative(const std::vector<Quantity>& outputs,
+                                                 const std::vector<Quantity>& inputs, const std::vector<double>& seed);
+
  private:
   // The integrator's consistent start (accelerations, multipliers) at the
   // present state, and the outputs of that state.
@@ -101,6 +111,16 @@ class Simulation {
   std::string redundantConstraints(const Configuration& q, const VectorXd& v, bool vanishing);
   double readFlexible(const Quantity& q);
   void setInput(double& slot, double value);
+  double& inputSlot(const Quantity& q);  // the value of an input quantity
+
+  // Output derivatives (output_derivatives.cpp).
+  bool consistentAccelerations(IntegratorState& s);
+  IntegratorState alongMotion(const IntegratorState& x, double eps, const VectorXd* jerk);
+  std::vector<double> valuesAt(IntegratorState& s, const std::vector<Quantity>& outputs, int order);
+  int exactDerivativeOrder(const Quantity& q) const;
+  double exactDerivative(const Quantity& q, int order);
+  double rateFromState(const Quantity& q);
+  Quat outputQuaternion(std::size_t i, const Mat3& A) const;
 
   const Scene scene_;
   System system_;
@@ -112,6 +132,7 @@ class Simulation {
   std::vector<int> bodyIndex_, jointIndex_;  // scene order -> model order
   std::vector<Quat> orientation_;            // sign-continuous across steps: scene bodies, then mesh nodes
   VectorXd outputLambda_;  // multipliers of the evaluated outputs
+  VectorXd outputVdot_;    // accelerations of the evaluated outputs
   bool outputsCurrent_ = false;
   bool reactionsCurrent_ = false;  // the evaluated outputs include consistent reactions
   bool inputsChangedSinceStep_ = false;

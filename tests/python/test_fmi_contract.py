@@ -75,8 +75,6 @@ def test_undeclared_capabilities_return_error_with_a_log_line(slave):
     assert "canGetAndSetFMUstate=false" in slave.messages()
     assert slave.call("setRealInputDerivatives", [slave.vr["hinge.torque"]], [1], [0.0]) == ERROR
     assert "canInterpolateInputs=false" in slave.messages()
-    assert slave.call("getRealOutputDerivatives", [slave.vr["hinge.angle"]], [1]) == ERROR
-    assert "maxOutputDerivativeOrder=0" in slave.messages()
 
 
 def test_bad_values_are_refused_naming_the_variable(slave):

@@ -106,8 +106,9 @@ def test_model_description_declares_only_what_works(pendulum_fmu):
     assert cs.needsExecutionTool is False and cs.canBeInstantiatedOnlyOncePerProcess is False
     # Not implemented yet, so declared false (their functions return fmi2Error).
     assert cs.canGetAndSetFMUstate is False and cs.canSerializeFMUstate is False
-    assert cs.canInterpolateInputs is False and cs.providesDirectionalDerivative is False
-    assert cs.maxOutputDerivativeOrder == 0
+    assert cs.canInterpolateInputs is False
+    # Output and directional derivatives (tests/python/test_derivatives.py).
+    assert cs.providesDirectionalDerivative is True and cs.maxOutputDerivativeOrder == 2
     assert md.variableNamingConvention == "structured"
     names = {v.name: v for v in md.modelVariables}
     assert names["hinge.torque"].causality == "input"
