@@ -16,7 +16,4 @@ struct Capabilities {
 std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>& table, const std::string& guid,
                                 const std::string& modelIdentifier, const Capabilities& caps);
 
-// Log categories the binary knows, with their descriptions.
-const std::vector<std::pair<std::string, std::string>>& logCategories();
-
 }  // namespace mfbd
