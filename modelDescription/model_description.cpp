@@ -1,5 +1,7 @@
 #include "model_description.hpp"
 
+#include <pugixml.hpp>
+
 #include <iomanip>
 #include <map>
 #include <set>
@@ -7,44 +9,14 @@
 
 namespace mfbd {
 
-const std::vector<std::pair<std::string, std::string>>& logCategories() {
-  static const std::vector<std::pair<std::string, std::string>> categories = {
-      {"logEvents", "Initialization, reset, termination"},
-      {"logSingularLinearSystems", "Singular iteration matrices"},
-      {"logNonlinearSystems", "Newton iterations that fail or slow down"},
-      {"logStatusWarning", "Calls that return fmi2Warning"},
-      {"logStatusDiscard", "Steps that return fmi2Discard"},
-      {"logStatusError", "Calls that return fmi2Error"},
-      {"logStep", "Per communication step: substeps, Newton iterations"},
-      {"logStatistics", "At fmi2Terminate: substeps, Newton iterations, factorizations of the run"},
-      {"logAll", "Everything"},
-  };
-  return categories;
-}
-
 namespace {
 
-// Text as an XML attribute value. Tab, line feed and carriage return are
-// written as character references, since a reader replaces them by spaces
-// when they stand literally in an attribute. The scene parser has refused
-// the characters XML 1.0 cannot carry (Field::text).
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      case '\t': out += "&#9;"; break;
-      case '\n': out += "&#10;"; break;
-      case '\r': out += "&#13;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
+// Text goes in through pugixml, which escapes it (& < > " and, in
+// attributes, tab, line feed and carriage return as character references,
+// since a reader replaces them by spaces when they stand literally). The
+// scene parser has refused the characters XML 1.0 cannot carry
+// (Field::text).
+using Node = pugi::xml_node;
 
 std::string number(double x) {
   std::ostringstream s;
@@ -53,23 +25,24 @@ std::string number(double x) {
 }
 
 // SI base-unit exponents of the units the table uses (FMI 2.0 BaseUnit).
-std::string baseUnit(const std::string& unit) {
-  static const std::map<std::string, std::string> known = {
-      {"m", "m=\"1\""},
-      {"s", "s=\"1\""},
-      {"kg", "kg=\"1\""},
-      {"rad", "rad=\"1\""},
-      {"m/s", "m=\"1\" s=\"-1\""},
-      {"m/s2", "m=\"1\" s=\"-2\""},
-      {"rad/s", "rad=\"1\" s=\"-1\""},
-      {"N", "kg=\"1\" m=\"1\" s=\"-2\""},
-      {"N.m", "kg=\"1\" m=\"2\" s=\"-2\""},
-      {"N.s/m", "kg=\"1\" s=\"-1\""},
-      {"N.m.s/rad", "kg=\"1\" m=\"2\" s=\"-1\" rad=\"-1\""},
-      {"kg.m2", "kg=\"1\" m=\"2\""},
+using Exponents = std::vector<std::pair<const char*, int>>;
+Exponents baseUnit(const std::string& unit) {
+  static const std::map<std::string, Exponents> known = {
+      {"m", {{"m", 1}}},
+      {"s", {{"s", 1}}},
+      {"kg", {{"kg", 1}}},
+      {"rad", {{"rad", 1}}},
+      {"m/s", {{"m", 1}, {"s", -1}}},
+      {"m/s2", {{"m", 1}, {"s", -2}}},
+      {"rad/s", {{"rad", 1}, {"s", -1}}},
+      {"N", {{"kg", 1}, {"m", 1}, {"s", -2}}},
+      {"N.m", {{"kg", 1}, {"m", 2}, {"s", -2}}},
+      {"N.s/m", {{"kg", 1}, {"s", -1}}},
+      {"N.m.s/rad", {{"kg", 1}, {"m", 2}, {"s", -1}, {"rad", -1}}},
+      {"kg.m2", {{"kg", 1}, {"m", 2}}},
   };
   const auto it = known.find(unit);
-  return it == known.end() ? "" : it->second;
+  return it == known.end() ? Exponents{} : it->second;
 }
 
 const char* causalityName(Causality c) {
@@ -90,50 +63,51 @@ const char* variabilityName(Variability v) {
   return "";
 }
 
-void writeUnits(std::ostream& x, const std::vector<Variable>& table) {
+void writeUnits(Node x, const std::vector<Variable>& table) {
   std::set<std::string> units;
   for (const Variable& v : table)
     if (!v.unit.empty()) units.insert(v.unit);
   if (units.empty()) return;
-  x << "  <UnitDefinitions>\n";
+  Node definitions = x.append_child("UnitDefinitions");
   for (const std::string& u : units) {
-    const std::string base = baseUnit(u);
-    if (base.empty()) x << "    <Unit name=\"" << escape(u) << "\"/>\n";
-    else x << "    <Unit name=\"" << escape(u) << "\"><BaseUnit " << base << "/></Unit>\n";
+    Node unit = definitions.append_child("Unit");
+    unit.append_attribute("name") = u.c_str();
+    const Exponents base = baseUnit(u);
+    if (base.empty()) continue;
+    Node baseNode = unit.append_child("BaseUnit");
+    for (const auto& [name, exponent] : base) baseNode.append_attribute(name) = exponent;
   }
-  x << "  </UnitDefinitions>\n";
 }
 
-void writeVariables(std::ostream& x, const std::vector<Variable>& table) {
-  x << "  <ModelVariables>\n";
+void writeVariables(Node x, const std::vector<Variable>& table) {
+  Node variables = x.append_child("ModelVariables");
   for (std::size_t i = 0; i < table.size(); ++i) {
     const Variable& v = table[i];
-    x << "    <!-- index " << i + 1 << " -->\n";
-    x << "    <ScalarVariable name=\"" << escape(v.name) << "\" valueReference=\"" << v.valueReference
-      << "\" causality=\"" << causalityName(v.causality) << "\" variability=\"" << variabilityName(v.variability)
-      << "\"";
+    variables.append_child(pugi::node_comment).set_value((" index " + std::to_string(i + 1) + " ").c_str());
+    Node s = variables.append_child("ScalarVariable");
+    s.append_attribute("name") = v.name.c_str();
+    s.append_attribute("valueReference") = v.valueReference;
+    s.append_attribute("causality") = causalityName(v.causality);
+    s.append_attribute("variability") = variabilityName(v.variability);
     // Parameters are exact; inputs take a start value but no initial attribute.
-    if (v.causality == Causality::Parameter) x << " initial=\"exact\"";
-    x << " description=\"" << escape(v.description) << "\">\n      <Real";
-    if (!v.unit.empty()) x << " unit=\"" << escape(v.unit) << "\"";
-    if (v.causality != Causality::Output) x << " start=\"" << number(v.start) << "\"";
-    x << "/>\n    </ScalarVariable>\n";
+    if (v.causality == Causality::Parameter) s.append_attribute("initial") = "exact";
+    s.append_attribute("description") = v.description.c_str();
+    Node real = s.append_child("Real");
+    if (!v.unit.empty()) real.append_attribute("unit") = v.unit.c_str();
+    if (v.causality != Causality::Output) real.append_attribute("start") = number(v.start).c_str();
   }
-  x << "  </ModelVariables>\n";
 }
 
 // Outputs and the inputs they depend on at a fixed state (outputDependencies).
 // Initial unknowns depend on all parameters and inputs (no dependencies
 // attribute).
-void writeStructure(std::ostream& x, const Scene& scene, const std::vector<Variable>& table) {
+void writeStructure(Node x, const Scene& scene, const std::vector<Variable>& table) {
   bool anyOutput = false;
   for (const Variable& v : table) anyOutput = anyOutput || v.causality == Causality::Output;
-  if (!anyOutput) {  // the schema wants no empty Outputs / InitialUnknowns
-    x << "  <ModelStructure/>\n";
-    return;
-  }
+  Node structure = x.append_child("ModelStructure");
+  if (!anyOutput) return;  // the schema wants no empty Outputs / InitialUnknowns
   const Model model = assemble(scene);
-  x << "  <ModelStructure>\n    <Outputs>\n";
+  Node outputs = structure.append_child("Outputs");
   for (std::size_t i = 0; i < table.size(); ++i) {
     if (table[i].causality != Causality::Output) continue;
     std::string indices, kinds;
@@ -141,14 +115,14 @@ void writeStructure(std::ostream& x, const Scene& scene, const std::vector<Varia
       indices += (indices.empty() ? "" : " ") + std::to_string(d.input + 1);
       kinds += (kinds.empty() ? "" : " ") + std::string(d.constantFactor ? "constant" : "dependent");
     }
-    x << "      <Unknown index=\"" << i + 1 << "\" dependencies=\"" << indices << "\"";
-    if (!kinds.empty()) x << " dependenciesKind=\"" << kinds << "\"";
-    x << "/>\n";
+    Node unknown = outputs.append_child("Unknown");
+    unknown.append_attribute("index") = unsigned(i + 1);
+    unknown.append_attribute("dependencies") = indices.c_str();
+    if (!kinds.empty()) unknown.append_attribute("dependenciesKind") = kinds.c_str();
   }
-  x << "    </Outputs>\n    <InitialUnknowns>\n";
+  Node initial = structure.append_child("InitialUnknowns");
   for (std::size_t i = 0; i < table.size(); ++i)
-    if (table[i].causality == Causality::Output) x << "      <Unknown index=\"" << i + 1 << "\"/>\n";
-  x << "    </InitialUnknowns>\n  </ModelStructure>\n";
+    if (table[i].causality == Causality::Output) initial.append_child("Unknown").append_attribute("index") = unsigned(i + 1);
 }
 
 // Outputs that the consistent accelerations or multipliers enter: they
@@ -161,11 +135,6 @@ bool readsAccelerations(QuantityKind k) {
 
 }  // namespace
 
-int maxOutputDerivativeOrder(const Scene& scene) {
-  if (scene.analysis != Analysis::Dynamic) return 0;
-  return scene.flexibleBodies.empty() ? 2 : 1;
-}
-bool providesDirectionalDerivative(const Scene& scene) { return scene.analysis == Analysis::Dynamic; }
 
 // At a fixed state (q, v, t): force inputs (joint torques and forces,
 // applied forces, spring actuators, nodal loads) move the accelerations and
@@ -208,32 +177,46 @@ std::vector<Dependency> outputDependencies(const Model& model, const std::vector
 
 std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>& table, const std::string& guid,
                                 const std::string& modelIdentifier, const Capabilities& caps) {
-  auto flag = [](bool b) { return b ? "true" : "false"; };
-  std::ostringstream x;
-  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-    << "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"" << escape(scene.name) << "\" guid=\"" << guid
-    << "\" description=\"" << escape(scene.description) << "\" generationTool=\"MFBD-FMU mfbd-pack\""
-    << " variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n"
-    << "  <CoSimulation modelIdentifier=\"" << escape(modelIdentifier) << "\""
-    << " needsExecutionTool=\"false\" canHandleVariableCommunicationStepSize=\"true\""
-    << " canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"" << maxOutputDerivativeOrder(scene)
-    << "\" canRunAsynchronuously=\"false\""
-    << " canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\""
-    << " canGetAndSetFMUstate=\"" << flag(caps.canGetAndSetFMUstate) << "\" canSerializeFMUstate=\""
-    << flag(caps.canSerializeFMUstate) << "\" providesDirectionalDerivative=\""
-    << flag(providesDirectionalDerivative(scene)) << "\"/>\n";
+  pugi::xml_document document;
+  Node declaration = document.append_child(pugi::node_declaration);
+  declaration.append_attribute("version") = "1.0";
+  declaration.append_attribute("encoding") = "UTF-8";
+  Node x = document.append_child("fmiModelDescription");
+  x.append_attribute("fmiVersion") = "2.0";
+  x.append_attribute("modelName") = scene.name.c_str();
+  x.append_attribute("guid") = guid.c_str();
+  x.append_attribute("description") = scene.description.c_str();
+  x.append_attribute("generationTool") = "MFBD-FMU mfbd-pack";
+  x.append_attribute("variableNamingConvention") = "structured";
+  x.append_attribute("numberOfEventIndicators") = "0";
+  Node cs = x.append_child("CoSimulation");
+  cs.append_attribute("modelIdentifier") = modelIdentifier.c_str();
+  cs.append_attribute("needsExecutionTool") = "false";
+  cs.append_attribute("canHandleVariableCommunicationStepSize") = "true";
+  cs.append_attribute("canInterpolateInputs") = "false";
+  cs.append_attribute("maxOutputDerivativeOrder") = maxOutputDerivativeOrder(scene);
+  cs.append_attribute("canRunAsynchronuously") = "false";
+  cs.append_attribute("canBeInstantiatedOnlyOncePerProcess") = "false";
+  cs.append_attribute("canNotUseMemoryManagementFunctions") = "true";
+  cs.append_attribute("canGetAndSetFMUstate") = caps.canGetAndSetFMUstate;
+  cs.append_attribute("canSerializeFMUstate") = caps.canSerializeFMUstate;
+  cs.append_attribute("providesDirectionalDerivative") = providesDirectionalDerivative(scene);
   writeUnits(x, table);
-  x << "  <LogCategories>\n";
-  for (const auto& [name, description] : logCategories())
-    x << "    <Category name=\"" << name << "\" description=\"" << escape(description) << "\"/>\n";
-  x << "  </LogCategories>\n";
-  x << "  <DefaultExperiment startTime=\"" << number(scene.experiment.startTime) << "\" stopTime=\""
-    << number(scene.experiment.stopTime) << "\" stepSize=\"" << number(scene.experiment.outputInterval)
-    << "\"/>\n";
+  Node categories = x.append_child("LogCategories");
+  for (const auto& [name, description] : logCategories()) {
+    Node category = categories.append_child("Category");
+    category.append_attribute("name") = name.c_str();
+    category.append_attribute("description") = description.c_str();
+  }
+  Node experiment = x.append_child("DefaultExperiment");
+  experiment.append_attribute("startTime") = number(scene.experiment.startTime).c_str();
+  experiment.append_attribute("stopTime") = number(scene.experiment.stopTime).c_str();
+  experiment.append_attribute("stepSize") = number(scene.experiment.outputInterval).c_str();
   writeVariables(x, table);
   writeStructure(x, scene, table);
-  x << "</fmiModelDescription>\n";
-  return x.str();
+  std::ostringstream out;
+  document.save(out, "  ", pugi::format_default, pugi::encoding_utf8);
+  return out.str();
 }
 
 }  // namespace mfbd

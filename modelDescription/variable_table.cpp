@@ -264,4 +264,25 @@ std::string sceneGuid(const std::string& sceneText) {
   return out;
 }
 
+const std::vector<std::pair<std::string, std::string>>& logCategories() {
+  static const std::vector<std::pair<std::string, std::string>> categories = {
+      {"logEvents", "Initialization, reset, termination"},
+      {"logSingularLinearSystems", "Singular iteration matrices"},
+      {"logNonlinearSystems", "Newton iterations that fail or slow down"},
+      {"logStatusWarning", "Calls that return fmi2Warning"},
+      {"logStatusDiscard", "Steps that return fmi2Discard"},
+      {"logStatusError", "Calls that return fmi2Error"},
+      {"logStep", "Per communication step: substeps, Newton iterations"},
+      {"logStatistics", "At fmi2Terminate: substeps, Newton iterations, factorizations of the run"},
+      {"logAll", "Everything"},
+  };
+  return categories;
+}
+
+int maxOutputDerivativeOrder(const Scene& scene) {
+  if (scene.analysis != Analysis::Dynamic) return 0;
+  return scene.flexibleBodies.empty() ? 2 : 1;
+}
+bool providesDirectionalDerivative(const Scene& scene) { return scene.analysis == Analysis::Dynamic; }
+
 }  // namespace mfbd

@@ -30,7 +30,17 @@ std::vector<Variable> variableTable(const Scene& scene);
 // variable-table format, so a binary built for another table refuses it.
 std::string sceneGuid(const std::string& sceneText);
 
+// Log categories the binary knows, with their descriptions (declared in
+// modelDescription.xml).
+const std::vector<std::pair<std::string, std::string>>& logCategories();
+
 // Names of a joint kind's coordinates ("angle", "x", ...), one per DOF.
 std::vector<std::string> jointCoordinateNames(JointType type);
+
+// Time derivatives of outputs and partial derivatives of outputs with
+// respect to inputs: in dynamics (a static analysis has no motion to
+// differentiate and its outputs follow the inputs only through a step).
+int maxOutputDerivativeOrder(const Scene& scene);
+bool providesDirectionalDerivative(const Scene& scene);
 
 }  // namespace mfbd

@@ -1,4 +1,4 @@
-// A minimal ZIP archive writer (stored entries, no compression): all an .fmu needs.
+// The FMU archive: entries compressed with deflate (libzip).
 #pragma once
 #include <string>
 #include <vector>

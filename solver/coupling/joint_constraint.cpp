@@ -74,38 +74,6 @@ MarkerFrames markerFrames(const JointConstraint& joint, const BodyPose& parent, 
   return f;
 }
 
-// e(t) of T^-1(theta) = I + S/2 + e S^2 (rotation.cpp) and e'(t)/t, for the
-// derivative of the log map's tangent. Series below 0.3, where the closed
-// forms lose digits to cancellation (e'/t: terms of size 2/t^4 cancel to
-// 1/360); from x cot x = sum (-4)^n B_2n x^2n / (2n)! (Bernoulli numbers),
-// x = t/2. Both agree to 1e-13 at the switch.
-struct TangentInverseCoefficient {
-  double e;
-  double dedtOverT;
-};
-
-TangentInverseCoefficient tangentInverseCoefficient(double t) {
-  const double t2 = t * t;
-  if (t < 0.3) {
-    const double t4 = t2 * t2, t6 = t4 * t2, t8 = t4 * t4;
-    constexpr double factorial15 = 1307674368000.0;
-    return {1.0 / 12.0 + t2 / 720.0 + t4 / 30240.0 + t6 / 1209600.0 + t8 / 47900160.0 + t8 * t2 * 691.0 / factorial15,
-            1.0 / 360.0 + t2 / 7560.0 + t4 / 201600.0 + t6 / 5987520.0 + t8 * 6910.0 / factorial15};
-  }
-  const double cotHalf = 1.0 / std::tan(0.5 * t), sinHalf = std::sin(0.5 * t);
-  return {1.0 / t2 - 0.5 * cotHalf / t,
-          -2.0 / (t2 * t2) + 0.5 * cotHalf / (t2 * t) + 0.25 / (t2 * sinHalf * sinHalf)};
-}
-
-// d/dtheta of T^-T(theta) mu, with T^-T mu = mu - theta x mu / 2 + e theta x (theta x mu).
-Mat3 tangentInverseTransposeDerivative(const Vec3& theta, const Vec3& mu) {
-  const TangentInverseCoefficient k = tangentInverseCoefficient(theta.norm());
-  const Vec3 doubleCross = theta.cross(theta.cross(mu));
-  return 0.5 * skew(mu) +
-         k.e * (theta.dot(mu) * Mat3::Identity() + theta * mu.transpose() - 2.0 * mu * theta.transpose()) +
-         k.dedtOverT * doubleCross * theta.transpose();
-}
-
 void evaluateBlock(const RowBlock& block, const MarkerFrames& f, int row, ConstraintEvaluation& out) {
   auto Ji = out.jacobianParent.middleRows(row, rowsOf(block));
   auto Jj = out.jacobianChild.middleRows(row, rowsOf(block));
@@ -183,7 +151,7 @@ void addBlockStiffness(const RowBlock& block, const MarkerFrames& f, const Eigen
       const Vec3 theta = logSO3(f.P.transpose() * f.Q);
       const Mat3 Tinv = tangentSO3Inverse(theta);
       const Vec3 tau = f.Q * (Tinv.transpose() * mu);
-      const Mat3 E = f.Q * tangentInverseTransposeDerivative(theta, mu) * Tinv * f.Q.transpose();
+      const Mat3 E = f.Q * tangentSO3InverseDerivative(theta, mu, true) * Tinv * f.Q.transpose();
       K.block<3, 3>(kPhiJ, kPhiJ) += E - skew(tau);
       K.block<3, 3>(kPhiJ, kPhiI) -= E;
       K.block<3, 3>(kPhiI, kPhiJ) += skew(tau) - E;

@@ -5,8 +5,8 @@
 #include <stdexcept>
 
 #include "flex/consistent_mass.hpp"
+#include "flex/corotational_force.hpp"
 #include "flex/element_state.hpp"
-#include "math/lanes.hpp"
 
 namespace mfbd {
 
@@ -47,56 +47,6 @@ Mat7 localTimoshenkoStiffness(const BeamSection& s, double L) {
   return K;
 }
 
-// ---------------------------------------------------------------------------
-// Inverse tangent T^-1(theta) = I + S/2 + e(t) S^2 (S = skew(theta),
-// t = |theta|, e = (1 - (t/2) cot(t/2)) / t^2, see math/rotation.cpp) and its
-// derivative in a direction dtheta,
-//   dT^-1 = skew(dtheta)/2 + e (skew(dtheta) S + S skew(dtheta))
-//           + (e'(t)/t) (theta . dtheta) S^2.
-// The closed forms of e and e'/t cancel badly for small t (e'/t loses ~1e-9
-// at t = 0.3); below 0.3 use the Taylor series, e = sum_n |B_2n|/(2n)! t^(2n-2)
-// (from x cot x), truncated where the next term is below 1e-12 relative.
-// ---------------------------------------------------------------------------
-struct InverseTangentCoefficients {
-  double e = 0.0, dEoverT = 0.0;
-};
-
-InverseTangentCoefficients inverseTangentCoefficients(double t2) {  // t2 = |theta|^2
-  InverseTangentCoefficients k;
-  if (t2 < 0.09) {  // t < 0.3
-    const double c[5] = {1.0 / 720.0, 1.0 / 30240.0, 1.0 / 1209600.0, 1.0 / 47900160.0,
-                         691.0 / 1307674368000.0};  // t^2 .. t^10 of e
-    k.e = 1.0 / 12.0 + t2 * (c[0] + t2 * (c[1] + t2 * (c[2] + t2 * (c[3] + t2 * c[4]))));
-    k.dEoverT = 2 * c[0] + t2 * (4 * c[1] + t2 * (6 * c[2] + t2 * (8 * c[3] + t2 * 10 * c[4])));
-  } else {
-    const double t = std::sqrt(t2), cotHalf = 1.0 / std::tan(0.5 * t), sinHalf = std::sin(0.5 * t);
-    k.e = (1.0 - 0.5 * t * cotHalf) / t2;
-    k.dEoverT = -2.0 / (t2 * t2) + cotHalf / (2.0 * t2 * t) + 1.0 / (4.0 * t2 * sinHalf * sinHalf);
-  }
-  return k;
-}
-
-InverseTangentCoefficients inverseTangentCoefficients(const Vec3& theta) {
-  return inverseTangentCoefficients(theta.squaredNorm());
-}
-
-// T^-1 itself, with S^2 = theta theta^T - t^2 I (the series keeps e exact to
-// round-off where the closed form of math/rotation.cpp cancels).
-Mat3 inverseTangent(const Vec3& theta, const InverseTangentCoefficients& k) {
-  Mat3 Tinv = k.e * theta * theta.transpose() + 0.5 * skew(theta);
-  Tinv.diagonal().array() += 1.0 - k.e * theta.squaredNorm();
-  return Tinv;
-}
-
-// The derivative applied to a vector x, as a linear map of dtheta:
-// dT^-1 x = J dtheta, or with transposed dT^-T x = J dtheta, where
-//   J = -+ skew(x)/2 - e (skew(theta x x) + S skew(x)) + (e'/t) (S^2 x) theta^T.
-Mat3 inverseTangentVariation(const Vec3& theta, const InverseTangentCoefficients& k, const Vec3& x,
-                             bool transposed) {
-  const Mat3 S = skew(theta), X = skew(x);
-  const Vec3 SSx = theta.cross(theta.cross(x));
-  return (transposed ? 0.5 : -0.5) * X - k.e * (skew(theta.cross(x)) + S * X) + k.dEoverT * SSx * theta.transpose();
-}
 
 // ---------------------------------------------------------------------------
 // Element kinematics in the current configuration.
@@ -114,7 +64,6 @@ struct Kinematics {
   Vec3 q[2], qMean;
   double qx = 0.0, qy = 0.0, eta = 0.0;  // qMean = qx e1 + qy e2, eta = qx/qy
   Vec3 theta[2];                         // local rotations log(Rr^T R_i)
-  InverseTangentCoefficients tangentCoefficients[2];
   Mat3 Tinv[2];
   double u = 0.0;  // elongation
   // Spin of the corotated frame, dw_r = P dq on dq = [dr1; dtheta1; dr2; dtheta2],
@@ -137,14 +86,6 @@ Mat3 chordSpin(const Kinematics& k) {
          k.inverseLength;
 }
 
-// Pr d and Pr^T w without forming Pr.
-Vec3 chordSpinTimes(const Kinematics& k, const Vec3& d) {
-  return (k.e3 * k.e2.dot(d) - (k.eta * k.e1 + k.e2) * k.e3.dot(d)) * k.inverseLength;
-}
-
-Vec3 chordSpinTransposeTimes(const Kinematics& k, const Vec3& w) {
-  return (k.e2 * k.e3.dot(w) - k.e3 * (k.eta * k.e1.dot(w) + k.e2.dot(w))) * k.inverseLength;
-}
 
 // Twist part of the frame spin: e1.dw_r gets (q_i x e3).dw_i / (2 qy) from
 // node i's world spin dw_i (rotation of q's projection about e1).
@@ -178,8 +119,7 @@ Kinematics corotatedFrame(const CorotationalBeam& beam, const NodePose& n1,
   Rr << k.e1, k.e2, k.e3;
   for (int i = 0; i < 2; ++i) {
     k.theta[i] = logSO3(Rr.transpose() * k.R[i]);
-    k.tangentCoefficients[i] = inverseTangentCoefficients(k.theta[i]);
-    k.Tinv[i] = inverseTangent(k.theta[i], k.tangentCoefficients[i]);
+    k.Tinv[i] = tangentSO3Inverse(k.theta[i]);
     // dw_i = A_i dtheta_i, so e1.dw_r gets twistRow . A_i dtheta_i
     k.twist[i] = k.A[i].transpose() * twistRow(k, i);
   }
@@ -189,45 +129,6 @@ Kinematics corotatedFrame(const CorotationalBeam& beam, const NodePose& n1,
   return k;
 }
 
-// P dq and P^T w from the compact form (no 3 x 12 products).
-Vec3 frameSpin(const Kinematics& k, const Vec12& dq) {
-  return chordSpinTimes(k, dq.segment<3>(6) - dq.segment<3>(0)) +
-         k.e1 * (k.twist[0].dot(dq.segment<3>(3)) + k.twist[1].dot(dq.segment<3>(9)));
-}
-
-Vec12 frameSpinTranspose(const Kinematics& k, const Vec3& w) {
-  const Vec3 chord = chordSpinTransposeTimes(k, w);
-  const double axial = k.e1.dot(w);
-  Vec12 out;
-  out << -chord, axial * k.twist[0], chord, axial * k.twist[1];
-  return out;
-}
-
-// de_l = B dq without forming B: du = e1.(dr2 - dr1) and
-// dtheta_i = Tinv_i X_i dq = Tinv_i (C_i^T dtheta_i - R_i^T P dq).
-Vec7 strainIncrement(const CorotationalBeam& beam, const Kinematics& k, const Vec12& dq) {
-  const Vec3 spin = frameSpin(k, dq);
-  Vec7 de;
-  de[0] = k.e1.dot(dq.segment<3>(6) - dq.segment<3>(0));
-  const Vec3 nodeSpin1 = beam.identityC1 ? Vec3(dq.segment<3>(3)) : Vec3(beam.C1.transpose() * dq.segment<3>(3));
-  const Vec3 nodeSpin2 = beam.identityC2 ? Vec3(dq.segment<3>(9)) : Vec3(beam.C2.transpose() * dq.segment<3>(9));
-  de.segment<3>(1) = k.Tinv[0] * (nodeSpin1 - k.R[0].transpose() * spin);
-  de.segment<3>(4) = k.Tinv[1] * (nodeSpin2 - k.R[1].transpose() * spin);
-  return de;
-}
-
-// f = B^T f_l without forming B: with m_i = Tinv_i^T f_l,i,
-// X_i^T m_i = E_i^T C_i m_i - P^T R_i m_i (E_i picks node i's rotation).
-Vec12 strainMapTranspose(const CorotationalBeam& beam, const Kinematics& k, const Vec7& fl) {
-  const Vec3 m1 = k.Tinv[0].transpose() * fl.segment<3>(1);
-  const Vec3 m2 = k.Tinv[1].transpose() * fl.segment<3>(4);
-  Vec12 f = frameSpinTranspose(k, -(k.R[0] * m1 + k.R[1] * m2));
-  f.segment<3>(0) -= fl[0] * k.e1;
-  f.segment<3>(3) += beam.identityC1 ? m1 : Vec3(beam.C1 * m1);
-  f.segment<3>(6) += fl[0] * k.e1;
-  f.segment<3>(9) += beam.identityC2 ? m2 : Vec3(beam.C2 * m2);
-  return f;
-}
 
 void tangentMaps(const CorotationalBeam& beam, Kinematics& k) {
   k.Pr = chordSpin(k);
@@ -352,7 +253,7 @@ void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, co
     const Vec3 s = k.R[i] * (k.Tinv[i].transpose() * flRotation);
     sSum += s;
     dStrain[i] = k.B.middleRows<3>(1 + 3 * i);
-    const Mat3x12 Y = inverseTangentVariation(k.theta[i], k.tangentCoefficients[i], flRotation, true) * dStrain[i];
+    const Mat3x12 Y = tangentSO3InverseDerivative(k.theta[i], flRotation, true) * dStrain[i];
     if (i == 0 ? beam.identityC1 : beam.identityC2)
       G.middleRows<3>(3 + 6 * i) += Y;
     else
@@ -372,7 +273,7 @@ void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, co
   K += G - frameSpinTransposeDerivative(k, d, sSum);
   if (dampingBeta == 0.0) return;
   // d(B v) = [(v2 - v1)^T de1; dT^-1_i X_i v + T^-1_i R_i^T (dw_i x P v - dP v)]
-  const Vec3 spinRate = frameSpin(k, v);
+  const Vec3 spinRate = k.P * v;
   const Mat3x12 dSpinRate = frameSpinDerivative(k, d, v);
   Eigen::Matrix<double, 7, 12> dStrainRate;
   dStrainRate.row(0) = (v.segment<3>(6) - v.segment<3>(0)).transpose() * d.dE1;
@@ -380,7 +281,7 @@ void addGeometricStiffness(const CorotationalBeam& beam, const Kinematics& k, co
     Mat3x12 dRelativeSpin = -dSpinRate;  // dw_i x P v - dP v
     dRelativeSpin.block<3, 3>(0, 3 + 6 * i) -= skew(spinRate) * k.A[i];
     dStrainRate.middleRows<3>(1 + 3 * i) =
-        inverseTangentVariation(k.theta[i], k.tangentCoefficients[i], k.X[i] * v, false) * dStrain[i] +
+        tangentSO3InverseDerivative(k.theta[i], k.X[i] * v, false) * dStrain[i] +
         k.Tinv[i] * (k.R[i].transpose() * dRelativeSpin);
   }
   K += dampingBeta * BtKl.lazyProduct(dStrainRate);
@@ -411,33 +312,9 @@ Vec7 localDeformationVector(const Kinematics& k) {
 
 namespace {
 
-// q of the shallow arch and its gradient on e_l (nonzero on the bending
-// pairs (2, 5) and (3, 6)). For a Vec7 or an array of 7, of doubles or
-// Lanes (math/lanes.hpp).
-template <class T, class E, class G>
-T archStrain(const E& e, G& gradient) {
-  for (int i = 0; i < 7; ++i) gradient[i] = T(0.0);
-  T q = T(0.0);
-  for (int a = 2; a <= 3; ++a) {
-    const T t1 = e[a], t2 = e[a + 3];
-    q = q + (T(2.0) * t1 * t1 - t1 * t2 + T(2.0) * t2 * t2) / T(30.0);
-    gradient[a] = (T(4.0) * t1 - t2) / T(30.0);
-    gradient[a + 3] = (T(4.0) * t2 - t1) / T(30.0);
-  }
-  return q;
-}
+double archStrain(const Vec7& e, Vec7& gradient) { return mfbd::archStrain<double>(e, gradient); }
 
-double archStrain(const Vec7& e, Vec7& gradient) { return archStrain<double>(e, gradient); }
-
-// The element constants the internal force reads, for one element or, as
-// Lanes, for four: K_l in the pairs of localStiffnessTimes (row i is
-// diagonal[i] e_i + pair[i] e_partner(i), partner 1 <-> 4, 2 <-> 5,
-// 3 <-> 6; pair[0] = 0).
-template <class T>
-struct ElementConstants {
-  T L0, EA, damping, mass;
-  T diagonal[7], pair[7];
-};
+}  // namespace
 
 ElementConstants<double> elementConstants(const CorotationalBeam& beam, double dampingBeta) {
   ElementConstants<double> k;
@@ -452,29 +329,6 @@ ElementConstants<double> elementConstants(const CorotationalBeam& beam, double d
   }
   return k;
 }
-
-template <class T>
-void localStiffnessTimes(const ElementConstants<T>& k, const T e[7], T out[7]) {
-  out[0] = k.diagonal[0] * e[0];
-  for (int a = 1; a <= 3; ++a) {
-    const int b = a + 3;
-    out[a] = k.diagonal[a] * e[a] + k.pair[a] * e[b];
-    out[b] = k.pair[b] * e[a] + k.diagonal[b] * e[b];
-  }
-}
-
-// localElasticForce on arrays (see there).
-template <class T>
-void localElasticForce(const ElementConstants<T>& k, const T e[7], T f[7]) {
-  T g[7];
-  const T q = archStrain<T>(e, g);
-  const T N = k.EA * (e[0] / k.L0 + q);
-  localStiffnessTimes(k, e, f);
-  f[0] = N;
-  for (int i = 1; i < 7; ++i) f[i] = f[i] + (N * k.L0) * g[i];  // g[0] = 0
-}
-
-}  // namespace
 
 Vec7 localElasticForce(const CorotationalBeam& beam, const Vec7& e) {
   Vec7 f;
@@ -572,12 +426,12 @@ LocalDeformation localDeformation(const CorotationalBeam& beam, const NodePose& 
 
 namespace {
 
-// f_l = elasticity + beta K_l edot_l, edot_l = B [v1; omega1; v2; omega2]
-// (the damping stays proportional to the linear local stiffness).
+// The local force f_l = elasticity + beta K_l edot_l, edot_l = B v (the
+// damping stays proportional to the linear local stiffness), from the
+// formed B (tangentMaps): the tangent's geometric part needs it.
 Vec7 localForce(const CorotationalBeam& beam, const Kinematics& k, const Vec12& v, double dampingBeta) {
-  const Mat7& Kl = beam.localStiffness;
   Vec7 fl = localElasticForce(beam, localDeformationVector(k));
-  if (dampingBeta != 0.0) fl += dampingBeta * localStiffnessTimes(Kl, strainIncrement(beam, k, v));
+  if (dampingBeta != 0.0) fl += dampingBeta * localStiffnessTimes<1>(beam.localStiffness, k.B * v);
   return fl;
 }
 
@@ -585,178 +439,6 @@ Vec12 nodeVelocities(const NodeVelocity& v1, const NodeVelocity& v2) {
   Vec12 v;
   v << v1.v, v1.omega, v2.v, v2.omega;
   return v;
-}
-
-Vector3<double> fromEigen(const Vec3& a) { return {a.x(), a.y(), a.z()}; }
-Vec3 toEigen(const Vector3<double>& a) { return Vec3(a.x, a.y, a.z); }
-Matrix3<double> fromEigen(const Mat3& M) {
-  return {{fromEigen(Vec3(M.col(0))), fromEigen(Vec3(M.col(1))), fromEigen(Vec3(M.col(2)))}};
-}
-
-}  // namespace
-
-ElementState<double> elementState(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
-                                  const NodeVelocity& v1, const NodeVelocity& v2) {
-  ElementState<double> s;
-  s.R[0] = fromEigen(beam.identityC1 ? n1.A : Mat3(n1.A * beam.C1));
-  s.R[1] = fromEigen(beam.identityC2 ? n2.A : Mat3(n2.A * beam.C2));
-  s.chord = fromEigen(Vec3(n2.r - n1.r));
-  s.chordRate = fromEigen(Vec3(v2.v - v1.v));
-  s.spin[0] = fromEigen(beam.identityC1 ? v1.omega : Vec3(beam.C1.transpose() * v1.omega));
-  s.spin[1] = fromEigen(beam.identityC2 ? v2.omega : Vec3(beam.C2.transpose() * v2.omega));
-  return s;
-}
-
-// With the inertia's accelerations (gravity subtracted).
-ElementState<double> elementState(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
-                                  const NodeVelocity& v1, const NodeVelocity& v2, const NodeAcceleration& a1,
-                                  const NodeAcceleration& a2, const Vec3& gravity) {
-  ElementState<double> s = elementState(beam, n1, n2, v1, v2);
-  s.chordAcceleration = fromEigen(Vec3(a2.a - a1.a));
-  s.spinRate[0] = fromEigen(beam.identityC1 ? a1.omegaDot : Vec3(beam.C1.transpose() * a1.omegaDot));
-  s.spinRate[1] = fromEigen(beam.identityC2 ? a2.omegaDot : Vec3(beam.C2.transpose() * a2.omegaDot));
-  s.acceleration[0] = fromEigen(Vec3(a1.a - gravity));
-  s.acceleration[1] = fromEigen(Vec3(a2.a - gravity));
-  return s;
-}
-
-// f = [force_1; C1 moment_1; force_2; C2 moment_2].
-void storeForce(const CorotationalBeam& beam, const ElementForce<double>& out, Vec12& f) {
-  const Vec3 m1 = toEigen(out.moment[0]), m2 = toEigen(out.moment[1]);
-  f << toEigen(out.force[0]), beam.identityC1 ? m1 : Vec3(beam.C1 * m1), toEigen(out.force[1]),
-      beam.identityC2 ? m2 : Vec3(beam.C2 * m2);
-}
-
-namespace {
-
-// logSO3(Rr^T R), Rr = [e1 e2 e3]: for local rotations beyond the series,
-// lane by lane.
-Vector3<double> relativeLog(const Vector3<double>& e1, const Vector3<double>& e2, const Vector3<double>& e3,
-                            const Matrix3<double>& R) {
-  Mat3 Rr, A;
-  Rr << toEigen(e1), toEigen(e2), toEigen(e3);
-  A << toEigen(R.col[0]), toEigen(R.col[1]), toEigen(R.col[2]);
-  return fromEigen(logSO3(Rr.transpose() * A));
-}
-
-Vector3<Lanes> relativeLog(const Vector3<Lanes>& e1, const Vector3<Lanes>& e2, const Vector3<Lanes>& e3,
-                           const Matrix3<Lanes>& R) {
-  Vector3<Lanes> out;
-  for (int i = 0; i < Lanes::kCount; ++i)
-    setLane(out, i, relativeLog(lane(e1, i), lane(e2, i), lane(e3, i), lane(R, i)));
-  return out;
-}
-
-// Rotation vector of the small local rotation Rr^T R (the element's
-// deformation), from the trace and the skew part alone: the series of
-// math/rotation.cpp's logSO3 below 0.2 rad, without forming the product.
-template <class T>
-Vector3<T> localRotation(const Vector3<T>& e1, const Vector3<T>& e2, const Vector3<T>& e3, const Matrix3<T>& R) {
-  const Vector3<T>&c0 = R.col[0], &c1 = R.col[1], &c2 = R.col[2];
-  const T cosT = (dot(e1, c0) + dot(e2, c1) + dot(e3, c2) - T(1.0)) * T(0.5);
-  const Vector3<T> w{T(0.5) * (dot(e3, c1) - dot(e2, c2)), T(0.5) * (dot(e1, c2) - dot(e3, c0)),
-                     T(0.5) * (dot(e2, c0) - dot(e1, c1))};
-  const T s2 = squaredNorm(w);
-  if (!(allGreater(cosT, 0.0) && allLess(s2, 0.04))) return relativeLog(e1, e2, e3, R);
-  static constexpr double c[11] = {1.0, 1.0 / 6.0, 3.0 / 40.0, 5.0 / 112.0, 35.0 / 1152.0, 63.0 / 2816.0,
-                                   231.0 / 13312.0, 143.0 / 10240.0, 6435.0 / 557056.0, 12155.0 / 1245184.0,
-                                   46189.0 / 5505024.0};
-  // Below 1e-3 rad three terms reach 1e-19 (the usual case); above, the
-  // series in two halves (Estrin) for a shorter dependency chain.
-  if (allLess(s2, 1e-6)) return (T(c[0]) + s2 * (T(c[1]) + s2 * T(c[2]))) * w;
-  const T s4 = s2 * s2, s10 = s4 * s4 * s2;
-  const T low = (T(c[0]) + s2 * T(c[1])) + s4 * ((T(c[2]) + s2 * T(c[3])) + s4 * T(c[4]));
-  const T high = (T(c[5]) + s2 * T(c[6])) + s4 * ((T(c[7]) + s2 * T(c[8])) + s4 * (T(c[9]) + s2 * T(c[10])));
-  return (low + s10 * high) * w;
-}
-
-// e(t) of T^-1 (inverseTangentCoefficients) alone; beyond the short series
-// lane by lane.
-double inverseTangentEBeyondSeries(double t2) { return inverseTangentCoefficients(t2).e; }
-Lanes inverseTangentEBeyondSeries(Lanes t2) {
-  Lanes e;
-  for (int i = 0; i < Lanes::kCount; ++i) e.set(i, inverseTangentCoefficients(t2[i]).e);
-  return e;
-}
-
-template <class T>
-T inverseTangentE(const Vector3<T>& theta) {
-  const T t2 = squaredNorm(theta);
-  if (allLess(t2, 1e-4))  // next term < 1e-17 relative
-    return T(1.0 / 12.0) + t2 * (T(1.0 / 720.0) + t2 * T(1.0 / 30240.0));
-  return inverseTangentEBeyondSeries(t2);
-}
-
-// T^-1 y and T^-T y without forming T^-1 = e theta theta^T + S/2 + (1 - e t^2) I.
-template <class T>
-Vector3<T> inverseTangentTimes(const Vector3<T>& theta, const T& e, const Vector3<T>& y, bool transposed) {
-  const Vector3<T> half = T(0.5) * cross(theta, y);
-  return (T(1.0) - e * squaredNorm(theta)) * y + (e * dot(theta, y)) * theta + (transposed ? -half : half);
-}
-
-// The same f as internalForces (corotatedFrame, localForce,
-// strainMapTranspose), written for the residual's element loop: no
-// Kinematics workspace, no tangent-operator matrices, products with the
-// frame taken as dot products, the local rotations by localRotation.
-// False when the corotated frame is undefined or the force not finite (in
-// any lane).
-template <class T>
-bool elementForce(const ElementState<T>& s, const ElementConstants<T>& k, ElementForce<T>& out) {
-  using std::sqrt;  // and mfbd::sqrt(Lanes)
-  const Matrix3<T>&R0 = s.R[0], &R1 = s.R[1];
-  const Vector3<T>& x = s.chord;
-  const T l = sqrt(squaredNorm(x));
-  if (!allGreater(l / k.L0, 1e-9)) return false;
-  const T inverseLength = T(1.0) / l;
-  const Vector3<T> e1 = inverseLength * x;
-  const Vector3<T>&q0 = R0.col[1], &q1 = R1.col[1];
-  const Vector3<T> qMean = T(0.5) * (q0 + q1);
-  const Vector3<T> n = cross(e1, qMean);
-  const T qy = sqrt(squaredNorm(n));
-  if (!allGreater(qy, 1e-6)) return false;
-  const Vector3<T> e3 = n / qy;
-  const Vector3<T> e2 = cross(e3, e1);
-  const T eta = dot(qMean, e1) / qy;
-  const Vector3<T> theta0 = localRotation(e1, e2, e3, R0), theta1 = localRotation(e1, e2, e3, R1);
-  const T tangent0 = inverseTangentE(theta0), tangent1 = inverseTangentE(theta1);
-  const T u = (squaredNorm(x) - k.L0 * k.L0) / (l + k.L0);
-  // twist_i = R_i^T (q_i x e3) / (2 qy): e1.dw_r of node i's spin
-  const Vector3<T> twist0 = transposeTimes(R0, cross(q0, e3) / (T(2.0) * qy));
-  const Vector3<T> twist1 = transposeTimes(R1, cross(q1, e3) / (T(2.0) * qy));
-  // Pr d and Pr^T w (chordSpinTimes, chordSpinTransposeTimes)
-  auto chordSpin = [&](const Vector3<T>& d) {
-    return inverseLength * (dot(e2, d) * e3 - dot(e3, d) * (eta * e1 + e2));
-  };
-  auto chordSpinTranspose = [&](const Vector3<T>& w) {
-    return inverseLength * (dot(e3, w) * e2 - (eta * dot(e1, w) + dot(e2, w)) * e3);
-  };
-  const T el[7] = {u, theta0.x, theta0.y, theta0.z, theta1.x, theta1.y, theta1.z};
-  T fl[7];
-  localElasticForce(k, el, fl);
-  if (!allZero(k.damping)) {
-    // edot_l = B v (strainIncrement)
-    const Vector3<T> spin = chordSpin(s.chordRate) + (dot(twist0, s.spin[0]) + dot(twist1, s.spin[1])) * e1;
-    const Vector3<T> rate0 = inverseTangentTimes(theta0, tangent0, s.spin[0] - transposeTimes(R0, spin), false);
-    const Vector3<T> rate1 = inverseTangentTimes(theta1, tangent1, s.spin[1] - transposeTimes(R1, spin), false);
-    const T rate[7] = {dot(e1, s.chordRate), rate0.x, rate0.y, rate0.z, rate1.x, rate1.y, rate1.z};
-    T damping[7];
-    localStiffnessTimes(k, rate, damping);
-    for (int i = 0; i < 7; ++i) fl[i] = fl[i] + k.damping * damping[i];
-  }
-  // f = B^T f_l (strainMapTranspose)
-  const Vector3<T> m0 = inverseTangentTimes(theta0, tangent0, Vector3<T>{fl[1], fl[2], fl[3]}, true);
-  const Vector3<T> m1 = inverseTangentTimes(theta1, tangent1, Vector3<T>{fl[4], fl[5], fl[6]}, true);
-  const Vector3<T> w = -(R0 * m0 + R1 * m1);
-  const Vector3<T> chord = chordSpinTranspose(w);
-  const T axial = dot(e1, w);
-  out.force[0] = -chord - fl[0] * e1;
-  out.force[1] = chord + fl[0] * e1;
-  out.moment[0] = axial * twist0 + m0;
-  out.moment[1] = axial * twist1 + m1;
-  if (!allZero(k.mass)) addInertiaForce(s, k.L0, k.mass, out);
-  // A NaN or infinity anywhere (u, theta, the frame) reaches the force; so does its sum.
-  const Vector3<T> sum = out.force[0] + out.force[1] + out.moment[0] + out.moment[1];
-  return allFinite(sum.x + sum.y + sum.z);
 }
 
 }  // namespace
@@ -769,93 +451,14 @@ bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const
   return true;
 }
 
-namespace {
-
-// Four elements side by side in vector lanes (math/lanes.hpp): gathered,
-// computed, stored. Inlined into each of the two variants below.
-[[gnu::always_inline]] inline bool elementForcesInLanes(int count, const ElementInputs elements[],
-                                                        const Vec3& gravity, Vec12 f[]) {
-  ElementState<Lanes> s;
-  ElementConstants<Lanes> k;
-  static const NodeAcceleration still;
-  for (int i = 0; i < Lanes::kCount; ++i) {
-    const ElementInputs& e = elements[std::min(i, count - 1)];  // spare lanes repeat the last element
-    const bool inertia = e.mass > 0.0;
-    const ElementState<double> one =
-        elementState(*e.beam, *e.pose1, *e.pose2, *e.velocity1, *e.velocity2, inertia ? *e.acceleration1 : still,
-                     inertia ? *e.acceleration2 : still, gravity);
-    for (int j = 0; j < 2; ++j) {
-      for (int c = 0; c < 3; ++c) setLane(s.R[j].col[c], i, one.R[j].col[c]);
-      setLane(s.spin[j], i, one.spin[j]);
-      setLane(s.spinRate[j], i, one.spinRate[j]);
-      setLane(s.acceleration[j], i, one.acceleration[j]);
-    }
-    setLane(s.chord, i, one.chord);
-    setLane(s.chordRate, i, one.chordRate);
-    setLane(s.chordAcceleration, i, one.chordAcceleration);
-    const ElementConstants<double> c = elementConstants(*e.beam, e.damping);
-    k.L0.set(i, c.L0);
-    k.EA.set(i, c.EA);
-    k.damping.set(i, c.damping);
-    k.mass.set(i, e.mass);
-    for (int j = 0; j < 7; ++j) {
-      k.diagonal[j].set(i, c.diagonal[j]);
-      k.pair[j].set(i, c.pair[j]);
-    }
-  }
-  ElementForce<Lanes> out;
-  if (!elementForce(s, k, out)) return false;
-  for (int i = 0; i < count; ++i)
-    storeForce(*elements[i].beam,
-               {{lane(out.force[0], i), lane(out.force[1], i)}, {lane(out.moment[0], i), lane(out.moment[1], i)}},
-               f[i]);
-  return true;
-}
-
-}  // namespace
-
-// Flattened: every kernel function inlined. The baseline x86-64 variant
-// does an operation on four lanes as two SSE2 instructions, the AVX2 one as
-// one; AVX2 alone, without FMA: the same operations, rounded alike, so both
-// give the same numbers to the bit (a fused multiply-add would not).
-[[gnu::flatten]] bool elementForceVectorsBaseline(int count, const ElementInputs elements[], const Vec3& gravity,
-                                                  Vec12 f[]) {
-  return elementForcesInLanes(count, elements, gravity, f);
-}
-
-[[gnu::flatten]] __attribute__((target("avx2"))) bool elementForceVectorsAvx2(int count,
-                                                                               const ElementInputs elements[],
-                                                                               const Vec3& gravity, Vec12 f[]) {
-  return elementForcesInLanes(count, elements, gravity, f);
-}
-
-bool hasAvx2() {
-  static const bool avx2 = [] {
-    __builtin_cpu_init();  // harmless if done; needed if asked before the library's constructors ran
-    return __builtin_cpu_supports("avx2") != 0;
-  }();
-  return avx2;
-}
-
-bool elementForceVectors(int count, const ElementInputs elements[], const Vec3& gravity, Vec12 f[]) {
-  return hasAvx2() ? elementForceVectorsAvx2(count, elements, gravity, f)
-                   : elementForceVectorsBaseline(count, elements, gravity, f);
-}
-
-BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
-                          const NodePose& n2, const NodeVelocity& v1,
-                          const NodeVelocity& v2, double dampingBeta, bool withTangent) {
-  BeamForces out;
+BeamTangent internalForceTangent(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
+                                 const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta) {
+  BeamTangent out;
   Kinematics k = corotatedFrame(beam, n1, n2);
   if (!k.valid) return out;
+  tangentMaps(beam, k);
   const Vec12 v = nodeVelocities(v1, v2);
   const Vec7 fl = localForce(beam, k, v, dampingBeta);
-  out.f = strainMapTranspose(beam, k, fl);
-  if (!withTangent) {
-    out.valid = out.f.allFinite();
-    return out;
-  }
-  tangentMaps(beam, k);
   // B^T K_t B with K_t = K_l + localTangentExcess taken apart (ArchTangent):
   // the bowing joins K_l's sparse pairs, the gradient part is a rank-one
   // update less the axial entry K_l already has. Small products:
@@ -874,7 +477,7 @@ BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
     out.C = dampingBeta * BtKl.lazyProduct(k.B);
   }
   addGeometricStiffness(beam, k, fl, v, dampingBeta, BtKl, out.K);
-  out.valid = out.f.allFinite() && out.K.allFinite();
+  out.valid = out.K.allFinite();
   return out;
 }
 

@@ -18,7 +18,6 @@
 #pragma once
 #include "flex/beam_section.hpp"
 #include "flex/nodal_inertia.hpp"
-#include "math/lanes.hpp"
 
 namespace mfbd {
 
@@ -76,7 +75,7 @@ struct LocalDeformation {
   double u = 0.0;                 // elongation l - L0
   Vec3 theta1 = Vec3::Zero();     // log(frame^T A1 C1)
   Vec3 theta2 = Vec3::Zero();
-  bool valid = false;             // false: frame undefined (see internalForces)
+  bool valid = false;             // false: frame undefined (see internalForceVector)
 };
 
 LocalDeformation localDeformation(const CorotationalBeam& beam, const NodePose& n1,
@@ -84,54 +83,32 @@ LocalDeformation localDeformation(const CorotationalBeam& beam, const NodePose& 
 
 // Internal force of elasticity plus stiffness-proportional damping,
 //   f = B^T (K_l e_l + beta K_l edot_l),   edot_l = B [v1; omega1; v2; omega2],
-// the force the nodes exert on the element (residual: M a + f = f_ext), with
+// the force the nodes exert on the element (residual: M a + f = f_ext).
+// False (f untouched) when the corotated frame is undefined: a collapsed
+// chord, or local rotations near 90 deg / relative twist near 180 deg;
+// callers treat it as a failed Newton iterate. Four elements at once:
+// flex/element_force_lanes.hpp (the same kernel, flex/corotational_force.hpp).
+bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
+                         const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta, Vec12& f);
+
+// Its tangent:
 //   K = df/d[dr1; dtheta1; dr2; dtheta2] at fixed velocities (exact, the
 //       damping force's position dependence included),
-//   C = df/d[v1; omega1; v2; omega2] = beta B^T K_l B.
-// valid = false (and f, K, C zero) when the corotated frame is undefined: a
-// collapsed chord, or local rotations near 90 deg / relative twist near
-// 180 deg; callers treat it as a failed Newton iterate.
-struct BeamForces {
-  Vec12 f = Vec12::Zero();
+//   C = df/d[v1; omega1; v2; omega2] = beta B^T K_l B;
+// valid = false (K, C zero) where the corotated frame is undefined.
+struct BeamTangent {
   Mat12 K = Mat12::Zero();
   Mat12 C = Mat12::Zero();
   bool valid = false;
 };
 
-BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1,
-                          const NodePose& n2, const NodeVelocity& v1,
-                          const NodeVelocity& v2, double dampingBeta,
-                          bool withTangent = true);  // false: f only (residual evaluations)
-
-// The internal force f of internalForces alone, for residual evaluations
-// (no tangent maps). Returns false when the corotated frame is undefined.
-bool internalForceVector(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
-                         const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta, Vec12& f);
-
-// The residual's element forces, kForceLanes elements at once (vector
-// lanes): internalForceVector's f plus, for an element with mass > 0, its
-// consistent inertia less weight (consistentInertiaForce, flex/
-// consistent_mass.hpp; the accelerations are read only then). False if any
-// element's frame is undefined or a force not finite.
-constexpr int kForceLanes = Lanes::kCount;
-struct ElementInputs {
-  const CorotationalBeam* beam;
-  double damping, mass;
-  const NodePose *pose1, *pose2;
-  const NodeVelocity *velocity1, *velocity2;
-  const NodeAcceleration *acceleration1, *acceleration2;
-};
-bool elementForceVectors(int count, const ElementInputs elements[], const Vec3& gravity, Vec12 f[]);
-// Its two variants, the one for this processor chosen by the above: for
-// the baseline x86-64 and, where hasAvx2(), for AVX2 (the same numbers).
-bool elementForceVectorsBaseline(int count, const ElementInputs elements[], const Vec3& gravity, Vec12 f[]);
-bool elementForceVectorsAvx2(int count, const ElementInputs elements[], const Vec3& gravity, Vec12 f[]);
-bool hasAvx2();
+BeamTangent internalForceTangent(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
+                                 const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta);
 
 // Stress resultants at the element ends in the corotated element frame,
 // force (N, Vy, Vz) and moment (T, My, Mz); at each end the action of the
 // part at larger x on the part at smaller x (N > 0 in tension), computed
-// from the forces f the nodes exert on the element: internalForces' f, plus
+// from the forces f the nodes exert on the element: internalForceVector's f, plus
 // the element's own inertia minus weight when it has mass (elementForce in
 // flex/flexible_mesh.hpp).
 struct SectionForces {

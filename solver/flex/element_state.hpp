@@ -2,7 +2,7 @@
 // (T = double) or four at a time (T = Lanes, math/lanes.hpp), in the frames
 // of the nodes' copies of the element frame R_i = A_i C_i: a node's C_i is
 // applied on the way in and out (elementState, storeForce). The internal
-// force's kernel is in corotational_beam.cpp, the consistent inertia's in
+// force's kernel is in corotational_force.hpp, the consistent inertia's in
 // consistent_mass.hpp.
 #pragma once
 #include "flex/corotational_beam.hpp"

@@ -62,6 +62,18 @@ inline bool allZero(Lanes a) {
   return true;
 }
 
+// f applied to each lane (a scalar function the kernels take lane by lane).
+template <class F>
+inline double eachLane(double a, F f) {
+  return f(a);
+}
+template <class F>
+inline Lanes eachLane(Lanes a, F f) {
+  Lanes r;
+  for (int i = 0; i < Lanes::kCount; ++i) r.set(i, f(a[i]));
+  return r;
+}
+
 template <class T>
 struct Vector3 {
   T x, y, z;

@@ -1,5 +1,7 @@
 #include "math/rotation.hpp"
 
+#include "math/rotation_series.hpp"
+
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -17,44 +19,6 @@ Mat3 skew(const Vec3& a) {
 Vec3 unskew(const Mat3& S) {
   return Vec3(S(2, 1) - S(1, 2), S(0, 2) - S(2, 0), S(1, 0) - S(0, 1)) * 0.5;
 }
-
-namespace {
-// Coefficients of exp/T with Taylor series below a small angle, where the
-// closed forms lose digits to cancellation.
-struct ExpCoefficients {
-  double a;  // sin(t)/t
-  double b;  // (1-cos t)/t^2
-  double c;  // (t - sin t)/t^3
-};
-
-// From the squared angle: the series need no square root, and small
-// increments (every Newton correction) need few terms. withC: also c
-// (only the tangent operator needs it, not the exponential map).
-template <bool withC>
-inline ExpCoefficients expCoefficients(double t2) {
-  if (t2 < 0.04) {
-    // Taylor series in t^2 (no sin/cos), more accurate than the closed
-    // forms, which cancel as t -> 0. Up to t^10 for t < 0.2, t^6 for
-    // t < 0.01, t^4 for t < 1e-3: the first omitted term is below 1e-18
-    // relative in each range.
-    static constexpr double a[6] = {1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0};
-    static constexpr double b[6] = {1.0 / 2.0, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0,
-                                    -1.0 / 479001600.0};
-    static constexpr double c[6] = {1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0,
-                                    -1.0 / 6227020800.0};
-    const int last = t2 < 1e-6 ? 2 : t2 < 1e-4 ? 3 : 5;
-    auto series = [t2, last](const double* k) {  // sum_n k_n t^2n, Horner
-      double sum = k[last];
-      for (int n = last - 1; n >= 0; --n) sum = sum * t2 + k[n];
-      return sum;
-    };
-    return {series(a), series(b), withC ? series(c) : 0.0};
-  }
-  const double t = std::sqrt(t2);
-  const double s = std::sin(t), c = std::cos(t);
-  return {s / t, (1.0 - c) / t2, (t - s) / (t2 * t)};
-}
-}  // namespace
 
 Mat3 expSO3(const Vec3& theta) {
   const double t2 = theta.squaredNorm();
@@ -76,21 +40,9 @@ Vec3 logSO3(const Mat3& R) {
   const double cosT = std::clamp((R.trace() - 1.0) * 0.5, -1.0, 1.0);
   const Vec3 w = unskew(R);  // = sin(t) * axis
   const double s2 = w.squaredNorm();
-  if (cosT > 0.0 && s2 < 0.04) {
-    // t < ~0.2 (the local rotations of a beam element, the relative
-    // rotations of a Newton step): t / sin(t) = asin(s)/s = sum_n c_n s^2n,
-    // c_n = c_(n-1) (2n-1)^2 / (2n (2n+1)), to s^20 (first omitted term
-    // below 1e-17 relative), without atan2.
-    static constexpr double c[11] = {1.0, 1.0 / 6.0, 3.0 / 40.0, 5.0 / 112.0, 35.0 / 1152.0, 63.0 / 2816.0,
-                                     231.0 / 13312.0, 143.0 / 10240.0, 6435.0 / 557056.0, 12155.0 / 1245184.0,
-                                     46189.0 / 5505024.0};
-    double f = c[10];
-    for (int n = 9; n >= 0; --n) f = f * s2 + c[n];
-    return w * f;
-  }
+  if (cosT > 0.0 && s2 < kArcsineSeriesLimit) return w * arcsineRatio(s2);
   const double sinT = std::sqrt(s2);
-  const double t = std::atan2(sinT, cosT);
-  if (t < 1e-4) return w * (1.0 + t * t / 6.0);  // t/sin(t) by series
+  const double t = std::atan2(sinT, cosT);  // t > 0.2 here
   if (t < 3.0) return w * (t / sinT);
   // Near pi, sin(t) is tiny: take the axis from the symmetric part,
   // R + R^T = 2 cos t I + 2 (1 - cos t) n n^T, and its sign from w.
@@ -110,16 +62,29 @@ Mat3 tangentSO3(const Vec3& theta) {
 }
 
 Mat3 tangentSO3Inverse(const Vec3& theta) {
-  const double t = theta.norm();
-  const Mat3 S = skew(theta);
-  // T^-1 = I + S/2 + (1/t^2)(1 - (t/2) cot(t/2)) S^2
-  double e;
-  if (t < 1e-4) {
-    e = 1.0 / 12.0 + t * t / 720.0;
-  } else {
-    e = (1.0 - 0.5 * t / std::tan(0.5 * t)) / (t * t);
-  }
-  return Mat3::Identity() + 0.5 * S + e * S * S;
+  // with S^2 = theta theta^T - t^2 I (no 3 x 3 product)
+  const double e = inverseTangentE(theta.squaredNorm());
+  Mat3 Tinv = e * theta * theta.transpose() + 0.5 * skew(theta);
+  Tinv.diagonal().array() += 1.0 - e * theta.squaredNorm();
+  return Tinv;
+}
+
+Mat3 tangentSO3InverseDerivative(const Vec3& theta, const Vec3& x, bool transposed) {
+  const InverseTangentCoefficients k = inverseTangentCoefficients(theta.squaredNorm());
+  const Mat3 X = skew(x);
+  const Vec3 SSx = theta.cross(theta.cross(x));
+  return (transposed ? 0.5 : -0.5) * X - k.e * (skew(theta.cross(x)) + skew(theta) * X) +
+         k.dEoverT * SSx * theta.transpose();
+}
+
+Vector3<double> relativeRotationVectorExact(const Vector3<double>& e1, const Vector3<double>& e2,
+                                            const Vector3<double>& e3, const Matrix3<double>& R) {
+  auto toEigen = [](const Vector3<double>& a) { return Vec3(a.x, a.y, a.z); };
+  Mat3 Rr, A;
+  Rr << toEigen(e1), toEigen(e2), toEigen(e3);
+  A << toEigen(R.col[0]), toEigen(R.col[1]), toEigen(R.col[2]);
+  const Vec3 theta = logSO3(Rr.transpose() * A);
+  return {theta.x(), theta.y(), theta.z()};
 }
 
 Mat3 polarStep(const Mat3& R) { return 0.5 * R * (3.0 * Mat3::Identity() - R.transpose() * R); }

@@ -26,8 +26,13 @@ Vec3 logSO3(const Mat3& R);
 // exp(theta + d) = exp(theta) exp(T(theta) d) + O(d^2).
 // (omega = T(theta) thetadot for R = exp(theta), omega in the body frame.)
 Mat3 tangentSO3(const Vec3& theta);
-// Its inverse, thetadot = T^-1(theta) omega.
+// Its inverse, thetadot = T^-1(theta) omega; T^-1 = I + S/2 + e S^2
+// (S = skew(theta), e: math/rotation_series.hpp).
 Mat3 tangentSO3Inverse(const Vec3& theta);
+// Its derivative applied to a fixed vector x, as a linear map of dtheta:
+// d(T^-1 x) = J dtheta, or with transposed d(T^-T x) = J dtheta, where
+//   J = -+ skew(x)/2 - e (skew(theta x x) + S skew(x)) + (e'/t) (S^2 x) theta^T.
+Mat3 tangentSO3InverseDerivative(const Vec3& theta, const Vec3& x, bool transposed);
 
 // One Newton step towards the polar factor, R (3I - R^T R)/2: it leaves a
 // rotation unchanged to first order in its error. The state's rotations are

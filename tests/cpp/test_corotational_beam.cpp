@@ -15,6 +15,7 @@
 #include "flex/beam_section.hpp"
 #include "flex/consistent_mass.hpp"
 #include "flex/corotational_beam.hpp"
+#include "flex/element_force_lanes.hpp"
 #include "flex/nodal_inertia.hpp"
 #include "math/rotation.hpp"
 
@@ -104,11 +105,66 @@ Mat12 finiteDifferenceTangent(const std::function<Vec12(const NodePose&, const N
   return K;
 }
 
+// The element's force and its tangent at one state (internalForceVector,
+// internalForceTangent); valid where both are.
+struct BeamForces {
+  Vec12 f = Vec12::Zero();
+  Mat12 K = Mat12::Zero(), C = Mat12::Zero();
+  bool valid = false;
+};
+
+BeamForces internalForces(const CorotationalBeam& beam, const NodePose& n1, const NodePose& n2,
+                          const NodeVelocity& v1, const NodeVelocity& v2, double dampingBeta) {
+  BeamForces out;
+  const BeamTangent tangent = internalForceTangent(beam, n1, n2, v1, v2, dampingBeta);
+  const bool force = internalForceVector(beam, n1, n2, v1, v2, dampingBeta, out.f);
+  out.K = tangent.K;
+  out.C = tangent.C;
+  out.valid = force && tangent.valid;
+  return out;
+}
+
 double relativeError(const Mat12& K, const Mat12& Kref) {
   return (K - Kref).cwiseAbs().maxCoeff() / Kref.cwiseAbs().maxCoeff();
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------
+// 0. The internal force is the gradient of the strain energy: without
+// damping, f = dU/dq with U = localStrainEnergy(e_l(q)), e_l from
+// localDeformation (the log map of math/rotation.cpp); central differences
+// over the manifold increments, at large rigid rotations. A second form of
+// f, independent of the kernel's products with B.
+// ---------------------------------------------------------------------------
+TEST(CorotationalBeam, InternalForceIsTheGradientOfTheStrainEnergy) {
+  Rng rng;
+  const NodeVelocity still;
+  auto energy = [](const CorotationalBeam& beam, const NodePose& a, const NodePose& b) {
+    const LocalDeformation d = localDeformation(beam, a, b);
+    Vec7 e;
+    e << d.u, d.theta1, d.theta2;
+    return localStrainEnergy(beam, e);
+  };
+  double worst = 0.0;
+  for (int trial = 0; trial < 20; ++trial) {
+    const Element e = randomElement(rng, balancedSection());
+    NodePose n1, n2;
+    deformedConfiguration(rng, e, 10.0, n1, n2);
+    Vec12 f, gradient;
+    ASSERT_TRUE(internalForceVector(e.beam, n1, n2, still, still, 0.0, f));
+    const double h = 1e-6;
+    for (int c = 0; c < 12; ++c) {
+      NodePose p1 = n1, p2 = n2, m1 = n1, m2 = n2;
+      applyIncrement(p1, p2, h * Vec12::Unit(c));
+      applyIncrement(m1, m2, -h * Vec12::Unit(c));
+      gradient[c] = (energy(e.beam, p1, p2) - energy(e.beam, m1, m2)) / (2 * h);
+    }
+    worst = std::max(worst, (f - gradient).cwiseAbs().maxCoeff() / f.cwiseAbs().maxCoeff());
+  }
+  std::printf("[ energy    ] max rel error of f against dU/dq: %.2e\n", worst);
+  EXPECT_LT(worst, 1e-6);
+}
 
 // ---------------------------------------------------------------------------
 // 1. Consistent tangent against finite differences, large rotations
@@ -228,7 +284,7 @@ TEST(CorotationalBeam, DampingTangentsMatchFiniteDifferences) {
 
 // The residual's element forces, four elements side by side in vector
 // lanes (elementForceVectors: internal force plus consistent inertia less
-// weight) against the tangent path's (internalForces, consistentInertia):
+// weight) against one element's (internalForceVector, consistentInertia):
 // lanes that take different branches (node frames
 // aligned with the element or not, damping or none, mass or none, local
 // rotations small enough for the short series, for the long one, or
@@ -283,7 +339,7 @@ TEST(CorotationalBeam, ResidualForcesInVectorLanesMatchTheTangentPaths) {
     ASSERT_TRUE(elementForceVectorsBaseline(count, inputs, gravity, baseline));
     for (int i = 0; i < count; ++i) {
       const Case& c = cases[first + i];
-      const BeamForces internal = internalForces(c.e.beam, c.n1, c.n2, c.v1, c.v2, c.damping, false);
+      const BeamForces internal = internalForces(c.e.beam, c.n1, c.n2, c.v1, c.v2, c.damping);
       ASSERT_TRUE(internal.valid);
       Vec12 reference = internal.f;
       if (c.mass > 0.0)
