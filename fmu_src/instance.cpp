@@ -82,11 +82,11 @@ Instance* Instance::create(const std::string& name, const std::string& guid, con
   try {
     c->scene_ = parseScene(c->sceneText_);
     Simulation check(c->scene_);  // assembly errors surface here, not later
+    c->table_ = variableTable(c->scene_, ModelNumbering(check.system().model()));
   } catch (const SceneError& e) {
     c->fail("fmi2Instantiate", std::string("resources/scene.json: ") + e.what());
     return nullptr;
   }
-  c->table_ = variableTable(c->scene_);
   c->values_.resize(c->table_.size());
   for (std::size_t i = 0; i < c->table_.size(); ++i) {
     c->byReference_[c->table_[i].valueReference] = i;

@@ -137,16 +137,17 @@ int main(int argc, char** argv) {
       return 0;
     }
     mfbd::Scene scene;
+    mfbd::Model model;
     try {
       scene = mfbd::parseScene(text);
-      (void)mfbd::assemble(scene);  // what the binary will do at instantiate
+      model = mfbd::assemble(scene);  // what the binary will do at instantiate
     } catch (const mfbd::SceneError& e) {
       std::cerr << scenePath << ": " << e.what() << "\n";
       return 1;
     }
     for (const std::string& note : scene.notes) std::cout << "mfbd-pack: " << note << "\n";
     const std::string id = scene.name;
-    const auto table = mfbd::variableTable(scene);
+    const auto table = mfbd::variableTable(scene, mfbd::ModelNumbering(model));
     mfbd::Capabilities caps;
     std::vector<mfbd::ZipEntry> entries;
     entries.push_back({"modelDescription.xml",

@@ -54,13 +54,13 @@ std::vector<std::string> jointCoordinateNames(JointType type) {
   return {};
 }
 
-std::vector<Variable> variableTable(const Scene& scene) {
-  TableBuilder t;
-  using QK = QuantityKind;
+namespace {
+
+using QK = QuantityKind;
+
+void parameters(const Scene& scene, TableBuilder& t) {
   const Causality P = Causality::Parameter;
   const Variability F = Variability::Fixed;
-
-  // Parameters.
   for (int i = 0; i < int(scene.parameters.size()); ++i) {
     const ParameterSpec& p = scene.parameters[i];
     t.add(p.name, P, F, p.unit, p.description, {QK::UserParameter, i}, p.value);
@@ -82,14 +82,15 @@ std::vector<Variable> variableTable(const Scene& scene) {
     t.add(jt.name + ".damping", P, Variability::Tunable, rotational ? "N.m.s/rad" : "",
           "viscous damping per joint DOF", {QK::JointDamping, j}, jt.damping);
   }
-
   for (int b = 0; b < int(scene.flexibleBodies.size()); ++b)
     t.add(scene.flexibleBodies[b].name + ".damping", P, Variability::Tunable, "s",
           "stiffness-proportional material damping coefficient", {QK::FlexibleDamping, b},
           scene.flexibleBodies[b].damping);
+}
 
-  // Inputs: generalized joint forces along the DOFs of actuated joints, and
-  // the rates of rate-input drives.
+// Generalized joint forces along the DOFs of actuated joints, and the rates
+// of rate-input drives.
+void jointInputs(const Scene& scene, TableBuilder& t) {
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
     if (jt.driveRateInput) {
@@ -108,50 +109,38 @@ std::vector<Variable> variableTable(const Scene& scene) {
             "generalized force along " + names[d], {QK::JointForceInput, j, d}, 0.0);
     }
   }
+}
 
-  // Force-element inputs and flexible inputs, at the offsets the assembly gave.
-  const Model model = assemble(scene);
-  for (const ForceElement& e : model.forces) {
-    if (e.inputOffset < 0) continue;
-    if (e.kind == ForceElement::Kind::SpringDamper) {
+// Six inputs from `offset`: a force and a torque (moment) in `frame`.
+void wrenchInputs(TableBuilder& t, const std::string& owner, const char* torque, const std::string& what,
+                  const std::string& frame, QK kind, int offset) {
+  for (int c = 0; c < 3; ++c)
+    t.add(owner + ".force." + kAxes[c], Causality::Input, Variability::Continuous, "N",
+          what + " force, " + frame, {kind, offset + c}, 0.0);
+  for (int c = 0; c < 3; ++c)
+    t.add(owner + "." + torque + "." + kAxes[c], Causality::Input, Variability::Continuous, "N.m",
+          what + " " + torque + ", " + frame, {kind, offset + 3 + c}, 0.0);
+}
+
+// Force-element and flexible-node inputs, at the offsets assembly gave.
+void modelInputs(const ModelNumbering& model, TableBuilder& t) {
+  for (const ModelNumbering::ForceInput& e : model.forceInputs()) {
+    if (e.actuator)
       t.add(e.name + ".actuator_force", Causality::Input, Variability::Continuous, "N",
-            "actuator tension added to the spring-damper", {QK::ForceInput, e.inputOffset}, 0.0);
-      continue;
-    }
-    const char* frame = e.bodyFrame ? "body frame" : "world";
-    for (int c = 0; c < 3; ++c)
-      t.add(e.name + ".force." + kAxes[c], Causality::Input, Variability::Continuous, "N",
-            std::string("applied force, ") + frame, {QK::ForceInput, e.inputOffset + c}, 0.0);
-    for (int c = 0; c < 3; ++c)
-      t.add(e.name + ".torque." + kAxes[c], Causality::Input, Variability::Continuous, "N.m",
-            std::string("applied torque, ") + frame, {QK::ForceInput, e.inputOffset + 3 + c}, 0.0);
+            "actuator tension added to the spring-damper", {QK::ForceInput, e.offset}, 0.0);
+    else
+      wrenchInputs(t, e.name, "torque", "applied", e.bodyFrame ? "body frame" : "world", QK::ForceInput, e.offset);
   }
-  const FlexibleMesh& mesh = model.flexible;
-  auto nodeName = [&](int node) {
-    for (const FlexibleBody& fb : mesh.bodies)
-      if (node >= fb.firstNode && node < fb.firstNode + fb.nodeCount)
-        return fb.name + ".node" + std::to_string(node - fb.firstNode);
-    return std::string("?");
-  };
-  for (std::size_t n = 0; n < mesh.nodes.size(); ++n) {
-    const int d = mesh.nodes[n].drive;
-    if (d >= 0 && mesh.drives[d].inputOffset >= 0)
-      t.add(nodeName(int(n)) + ".drive_rate", Causality::Input, Variability::Continuous, "rad/s",
-            "rotation rate of the driven support about its axis", {QK::FlexibleInput, mesh.drives[d].inputOffset},
-            0.0);
+  for (const ModelNumbering::NodeInput& n : model.nodeInputs()) {
+    if (n.driveRate)
+      t.add(n.node + ".drive_rate", Causality::Input, Variability::Continuous, "rad/s",
+            "rotation rate of the driven support about its axis", {QK::FlexibleInput, n.offset}, 0.0);
+    else
+      wrenchInputs(t, n.node, "moment", "nodal", n.follower ? "node frame" : "world", QK::FlexibleInput, n.offset);
   }
-  for (const FlexLoad& l : mesh.loads) {
-    if (l.inputOffset < 0) continue;
-    const char* frame = l.follower ? "node frame" : "world";
-    for (int c = 0; c < 3; ++c)
-      t.add(nodeName(l.node) + ".force." + kAxes[c], Causality::Input, Variability::Continuous, "N",
-            std::string("nodal force, ") + frame, {QK::FlexibleInput, l.inputOffset + c}, 0.0);
-    for (int c = 0; c < 3; ++c)
-      t.add(nodeName(l.node) + ".moment." + kAxes[c], Causality::Input, Variability::Continuous, "N.m",
-            std::string("nodal moment, ") + frame, {QK::FlexibleInput, l.inputOffset + 3 + c}, 0.0);
-  }
+}
 
-  // Outputs: joints, then bodies, then flexible nodes and elements, as the scene selects.
+void jointOutputs(const Scene& scene, TableBuilder& t) {
   for (int j = 0; j < int(scene.joints.size()); ++j) {
     const JointSpec& jt = scene.joints[j];
     if (jt.isVirtual || !scene.outputs.exposesJoint(jt.name)) continue;
@@ -174,19 +163,25 @@ std::vector<Variable> variableTable(const Scene& scene) {
                "torque of the parent on the child about the joint origin, child marker frame",
                {QK::JointReactionTorque, j, c});
   }
-  // Flexible body joints with the joint or force element that made them.
-  for (int k = 0; k < int(model.flexibleBodyJoints.size()); ++k) {
-    const std::string& name = model.flexibleBodyJoints[k].name;
+}
+
+// Flexible body joints, named after the joint or force element that made them.
+void flexibleBodyJointOutputs(const ModelNumbering& model, TableBuilder& t) {
+  const std::vector<std::string> names = model.flexibleBodyJoints();
+  for (int k = 0; k < int(names.size()); ++k) {
     for (int c = 0; c < 3; ++c)
-      t.output(name + ".force." + kAxes[c], "N", "force of the node on the virtual body, virtual body frame",
+      t.output(names[k] + ".force." + kAxes[c], "N", "force of the node on the virtual body, virtual body frame",
                {QK::FlexibleBodyJointForce, k, c});
     for (int c = 0; c < 3; ++c)
-      t.output(name + ".torque." + kAxes[c], "N.m",
+      t.output(names[k] + ".torque." + kAxes[c], "N.m",
                "torque of the node on the virtual body about its origin, virtual body frame",
                {QK::FlexibleBodyJointTorque, k, c});
-    t.output(name + ".violation", "", "largest constraint violation of the weld (m, rad)",
+    t.output(names[k] + ".violation", "", "largest constraint violation of the weld (m, rad)",
              {QK::FlexibleBodyJointViolation, k});
   }
+}
+
+void bodyOutputs(const Scene& scene, TableBuilder& t) {
   for (int b = 0; b < int(scene.bodies.size()); ++b) {
     const std::string& name = scene.bodies[b].name;
     if (scene.bodies[b].isVirtual || !scene.outputs.exposesBody(name)) continue;
@@ -202,36 +197,39 @@ std::vector<Variable> variableTable(const Scene& scene) {
       t.output(name + ".angular_velocity." + kAxes[c], "rad/s", "angular velocity, world",
                {QK::BodyAngularVelocity, b, c});
   }
-  for (int f = 0; f < int(model.forces.size()); ++f) {
-    const ForceElement& e = model.forces[f];
-    if (e.kind != ForceElement::Kind::SpringDamper) continue;
-    t.output(e.name + ".length", "m", "distance between the spring's points", {QK::SpringLength, f, 0});
-    t.output(e.name + ".length_rate", "m/s", "rate of the length", {QK::SpringLength, f, 1});
-    t.output(e.name + ".tension", "N", "spring, damper and actuator force (pulling the points together)",
+}
+
+void springOutputs(const ModelNumbering& model, TableBuilder& t) {
+  for (const auto& [f, name] : model.springDampers()) {
+    t.output(name + ".length", "m", "distance between the spring's points", {QK::SpringLength, f, 0});
+    t.output(name + ".length_rate", "m/s", "rate of the length", {QK::SpringLength, f, 1});
+    t.output(name + ".tension", "N", "spring, damper and actuator force (pulling the points together)",
              {QK::SpringLength, f, 2});
   }
-  for (std::size_t b = 0; b < scene.flexibleBodies.size(); ++b) {
+}
+
+void nodeOutputs(const std::string& name, int n, TableBuilder& t) {
+  for (int c = 0; c < 3; ++c)
+    t.output(name + ".position." + kAxes[c], "m", "node position, world", {QK::NodePosition, n, c});
+  for (int c = 0; c < 4; ++c)
+    t.output(name + ".orientation." + kQuaternion[c], "", "unit quaternion node -> world",
+             {QK::NodeOrientation, n, c});
+  for (int c = 0; c < 3; ++c)
+    t.output(name + ".velocity." + kAxes[c], "m/s", "node velocity, world", {QK::NodeVelocity, n, c});
+  for (int c = 0; c < 3; ++c)
+    t.output(name + ".angular_velocity." + kAxes[c], "rad/s", "node angular velocity, world",
+             {QK::NodeAngularVelocity, n, c});
+}
+
+void flexibleBodyOutputs(const Scene& scene, const ModelNumbering& model, TableBuilder& t) {
+  for (int b = 0; b < int(scene.flexibleBodies.size()); ++b) {
     const FlexibleBodySpec& spec = scene.flexibleBodies[b];
-    const FlexibleBody& fb = mesh.bodies[b];
-    for (int i : spec.exposedNodes()) {
-      const std::string name = spec.name + ".node" + std::to_string(i);
-      const int n = fb.firstNode + i;
-      for (int c = 0; c < 3; ++c)
-        t.output(name + ".position." + kAxes[c], "m", "node position, world", {QK::NodePosition, n, c});
-      for (int c = 0; c < 4; ++c)
-        t.output(name + ".orientation." + kQuaternion[c], "", "unit quaternion node -> world",
-                 {QK::NodeOrientation, n, c});
-      for (int c = 0; c < 3; ++c)
-        t.output(name + ".velocity." + kAxes[c], "m/s", "node velocity, world", {QK::NodeVelocity, n, c});
-      for (int c = 0; c < 3; ++c)
-        t.output(name + ".angular_velocity." + kAxes[c], "rad/s", "node angular velocity, world",
-                 {QK::NodeAngularVelocity, n, c});
-    }
+    for (int i : spec.exposedNodes()) nodeOutputs(spec.name + ".node" + std::to_string(i), model.node(b, i), t);
     if (spec.outputEnergy) {
-      t.output(spec.name + ".kinetic_energy", "J", "kinetic energy of the nodal inertia", {QK::FlexibleEnergy, int(b), 0});
-      t.output(spec.name + ".strain_energy", "J", "elastic strain energy of the elements", {QK::FlexibleEnergy, int(b), 1});
+      t.output(spec.name + ".kinetic_energy", "J", "kinetic energy of the nodal inertia", {QK::FlexibleEnergy, b, 0});
+      t.output(spec.name + ".strain_energy", "J", "elastic strain energy of the elements", {QK::FlexibleEnergy, b, 1});
       t.output(spec.name + ".potential_energy", "J", "potential energy of gravity (zero at the world origin)",
-               {QK::FlexibleEnergy, int(b), 2});
+               {QK::FlexibleEnergy, b, 2});
     }
     for (int e : spec.outputElements) {
       const std::string name = spec.name + ".element" + std::to_string(e);
@@ -239,13 +237,29 @@ std::vector<Variable> variableTable(const Scene& scene) {
         const std::string at = name + ".end" + std::to_string(end + 1);
         for (int c = 0; c < 3; ++c)
           t.output(at + ".force." + kAxes[c], "N", "section force (N, Vy, Vz), element frame",
-                   {QK::ElementSectionForce, fb.firstElement + e, 6 * end + c});
+                   {QK::ElementSectionForce, model.element(b, e), 6 * end + c});
         for (int c = 0; c < 3; ++c)
           t.output(at + ".moment." + kAxes[c], "N.m", "section moment (T, My, Mz), element frame",
-                   {QK::ElementSectionForce, fb.firstElement + e, 6 * end + 3 + c});
+                   {QK::ElementSectionForce, model.element(b, e), 6 * end + 3 + c});
       }
     }
   }
+}
+
+}  // namespace
+
+// Parameters, inputs, then outputs: joints, flexible body joints, bodies,
+// spring-dampers, flexible nodes and elements, as the scene selects.
+std::vector<Variable> variableTable(const Scene& scene, const ModelNumbering& model) {
+  TableBuilder t;
+  parameters(scene, t);
+  jointInputs(scene, t);
+  modelInputs(model, t);
+  jointOutputs(scene, t);
+  flexibleBodyJointOutputs(model, t);
+  bodyOutputs(scene, t);
+  springOutputs(model, t);
+  flexibleBodyOutputs(scene, model, t);
   return t.table;
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "model/model_numbering.hpp"
 #include "simulation.hpp"
 
 namespace mfbd {
@@ -24,7 +25,8 @@ struct Variable {
   double start = 0.0;  // parameters and inputs
 };
 
-std::vector<Variable> variableTable(const Scene& scene);
+// The variables of a scene, at the numbers its assembled model gave.
+std::vector<Variable> variableTable(const Scene& scene, const ModelNumbering& model);
 
 // GUID of an FMU made from this scene text: a hash of the text and of the
 // variable-table format, so a binary built for another table refuses it.

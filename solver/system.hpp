@@ -6,6 +6,8 @@
 #include "flex/flexible_mesh.hpp"
 #include "integrator/dynamics.hpp"
 #include "model/data.hpp"
+#include "rigid/recursive_dynamics.hpp"
+#include "two_marker_constraints.hpp"
 
 namespace mfbd {
 
@@ -78,19 +80,42 @@ class System : public Dynamics {
   void evaluateKinematics(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot);
 
  private:
-  void nodesAndTree(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
-                    const VectorXd& lambda, VectorXd& phi);
+  // The residual (system.cpp).
   void rigidResidual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
-                     const VectorXd& lambda, VectorXd& r, VectorXd& phi);
+                     const VectorXd& lambda, VectorXd& r, VectorXd& phi, VectorXd* nodeRows = nullptr);
+  void jointForces(const Configuration& q, const VectorXd& v, VectorXd& tau) const;
+  // The joint-space tangent and its sparsity and colouring (joint_space_tangent.cpp).
+  void jointSpaceSparsity();
+  void colourRates();
   void rigidTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                     double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
-  void jointForces(const Configuration& q, const VectorXd& v, VectorXd& tau) const;
-  void weldForcesOnNodes(VectorXd& r) const;
+  // The recursive Newton matrix (recursive_newton_matrix.cpp).
+  bool chooseRecursiveNewtonMatrix() const;
   void recursiveTangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                         double cM, double cC, double cK, Triplets& iteration, Triplets& constraintJacobian);
+  void bodyBlocks(int i, const BiasRateDerivatives& D, double cM, double cC, double cK, Triplets& iteration) const;
+  Eigen::MatrixXd ownAxesStiffness(int i, const VectorXd& v, Configuration& moved) const;
+  void jointBlocks(int i, const BiasRateDerivatives& D, const VectorXd& v, double cC, double cK, Configuration& moved,
+                   Triplets& iteration) const;
   void forceElementTangent(double t, double cC, double cK, Triplets& iteration);
+  // Constraint rows: two-marker constraints and drives (two_marker_constraints.cpp).
+  SideColumns columnsOf(const ConstraintSide& side, bool bodyColumns) const;
+  Eigen::MatrixXd rowsOn(const ConstraintSide& side, const SideColumns& columns, const ConstraintJacobian& J,
+                         bool bodyColumns) const;
+  void twoMarkerRowsAndForces(const VectorXd& lambda, VectorXd& phi, VectorXd* nodeRows);
+  void twoMarkerJacobian(bool bodyColumns, Triplets& constraintJacobian);
+  void twoMarkerAccelerationTerms(VectorXd& gamma) const;
+  void twoMarkerStiffness(const VectorXd& lambda, double cK, bool bodyColumns, Triplets& iteration);
+  void driveRowsAndForces(double t, const Configuration& q, const VectorXd& lambda, VectorXd& phi, VectorXd& r);
+  void driveJacobian(Triplets& constraintJacobian) const;
+  // Phi_q: drives on their joint rates; two-marker constraints over the
+  // joint rates that move their bodies (Phi_q = Phi_Z B: joint-space form)
+  // or over the auxiliary body-level unknowns (bodyColumns: the recursive
+  // form), and their nodes' free DOFs. After forwardKinematics, with nodes_
+  // current.
   void constraintRows(bool bodyColumns, Triplets& constraintJacobian);
-  void weldTangent(const VectorXd& lambda, double cK, bool bodyColumns, Triplets& iteration) const;
+  const TwoMarkerConstraint& constraintAtRow(int firstRow) const;
+  JointReaction reaction(const TwoMarkerConstraint& k, const VectorXd& lambda) const;
   // Indices of body i's variations among the Newton matrix's unknowns
   // (auxiliary, after the velocities): of its pose and velocity y_i, of
   // the wrench z_i its inboard joint passes, of its acceleration w_i.
@@ -110,14 +135,12 @@ class System : public Dynamics {
   bool recursiveMatrix_ = false;  // Newton matrix in the recursive form (dynamics)
   std::vector<int> blockOfRate_;  // model_.blocks index of each rate
   // Sparsity of the rigid tangent: the joint rates that move each body (its
-  // path to ground), and which pairs of rates can couple at all (see the
-  // constructor). Fixed by the topology, so the pattern never changes.
+  // path to ground), and which pairs of rates can couple at all
+  // (jointSpaceSparsity). Fixed by the topology, so the pattern never changes.
   std::vector<std::vector<int>> supportColumns_;
   Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic> ratesCoupled_;
   std::vector<std::vector<int>> tangentColours_;  // rates perturbed together (rigidTangent)
-  // Phi_node^T lambda of each flexible body joint, from the last residual of
-  // the tree (the node side of its force, weldForcesOnNodes).
-  std::vector<Vec6> weldOnNodes_;
+  std::vector<TwoMarkerConstraint> constraints_;  // cut joints, then flexible body joints
   // Three translation rates (from velocityOffset) that turn with a stored rotation.
   struct TurningBlock {
     int velocityOffset, rotation;

@@ -16,7 +16,7 @@
 // vectors are ordered [f1 (world); m1 (node-1 frame); f2; m2], tangents are
 // derivatives with respect to the increments [dr1; dtheta1; dr2; dtheta2].
 #pragma once
-#include "flex/beam_section.hpp"
+#include "scene/beam_section.hpp"
 #include "flex/nodal_inertia.hpp"
 
 namespace mfbd {

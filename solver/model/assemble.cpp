@@ -201,9 +201,9 @@ Model assemble(const Scene& scene) {
     w.node = model.flexible.bodies[spec.flexibleBody].firstNode + spec.node;
     const NodePose& node = model.flexible.nodes[w.node].reference;
     const WorldFrame& body = design[w.virtualBody];
-    w.weld.type = JointType::Fixed;
-    w.weld.parentMarker = {node.A.transpose() * (body.origin - node.r), node.A.transpose() * body.orientation};
-    w.weld.childMarker = {Vec3::Zero(), Mat3::Identity()};
+    w.joint.type = JointType::Fixed;
+    w.joint.parentMarker = {node.A.transpose() * (body.origin - node.r), node.A.transpose() * body.orientation};
+    w.joint.childMarker = {Vec3::Zero(), Mat3::Identity()};
     w.constraintOffset = model.constraintCount;
     model.constraintCount += 6;
     model.flexibleBodyJoints.push_back(w);

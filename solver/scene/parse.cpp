@@ -10,6 +10,7 @@
 #include "scene/expression.hpp"
 #include "scene/json_field.hpp"
 #include "scene/scene.hpp"
+#include "scene/virtual_bodies.hpp"
 
 namespace mfbd {
 
@@ -257,7 +258,6 @@ void parseSelection(const Field& f, bool& all, std::vector<std::string>& names) 
 
 }  // namespace
 
-void makeVirtualBodies(Scene& scene);    // coupling/virtual_bodies.cpp
 void chooseCutJoints(Scene& scene);      // validate.cpp
 void validateScene(const Scene& scene);  // validate.cpp
 FlexibleBodySpec parseFlexibleBody(const Field& f);  // parse_flexible.cpp

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "flex/beam_section.hpp"
+#include "scene/beam_section.hpp"
 #include "math/rotation.hpp"
 #include "scene/time_function.hpp"
 

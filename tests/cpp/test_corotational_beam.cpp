@@ -12,7 +12,7 @@
 #include <random>
 #include <vector>
 
-#include "flex/beam_section.hpp"
+#include "scene/beam_section.hpp"
 #include "flex/consistent_mass.hpp"
 #include "flex/corotational_beam.hpp"
 #include "flex/element_force_lanes.hpp"

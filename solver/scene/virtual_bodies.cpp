@@ -1,6 +1,6 @@
 // Virtual bodies (docs/design.md 3): wherever a joint or force element names a
-// flexible node, the assembly puts a massless rigid body at that marker and
-// welds it to the node with a flexible body joint. The joint or force element
+// flexible node, parsing puts a massless rigid body at that marker and
+// holds it to the node with a flexible body joint. The joint or force element
 // then connects rigid bodies only, so it is written once, against markers,
 // and works unchanged on rigid-rigid, rigid-flex and flex-flex pairs.
 //
@@ -11,7 +11,7 @@
 // fixed by the six rows of its flexible body joint.
 #include <sstream>
 
-#include "scene/scene.hpp"
+#include "scene/virtual_bodies.hpp"
 
 namespace mfbd {
 
@@ -67,12 +67,12 @@ class VirtualBodyMaker {
     body.position = position;
     body.orientation = orientation;
     scene_.bodies.push_back(body);
-    FlexibleBodyJointSpec weld;
-    weld.name = owner + "." + end + "_flexible_body_joint";
-    weld.virtualBody = body.name;
-    weld.flexibleBody = at.flexibleBody;
-    weld.node = at.node;
-    scene_.flexibleBodyJoints.push_back(weld);
+    FlexibleBodyJointSpec joint;
+    joint.name = owner + "." + end + "_flexible_body_joint";
+    joint.virtualBody = body.name;
+    joint.flexibleBody = at.flexibleBody;
+    joint.node = at.node;
+    scene_.flexibleBodyJoints.push_back(joint);
     if (needsFreeJoint) {
       JointSpec free;
       free.name = body.name + "_joint";
@@ -85,7 +85,7 @@ class VirtualBodyMaker {
     }
     std::ostringstream note;
     note << "virtual body '" << body.name << "' at node " << at.node << " of '"
-         << scene_.flexibleBodies[at.flexibleBody].name << "', welded by flexible body joint '" << weld.name << "'";
+         << scene_.flexibleBodies[at.flexibleBody].name << "', welded by flexible body joint '" << joint.name << "'";
     if ((position - at.position).norm() > 0.0) note << " (offset " << (position - at.position).norm() << " m)";
     scene_.notes.push_back(note.str());
     return body.name;

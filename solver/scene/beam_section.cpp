@@ -1,4 +1,4 @@
-#include "flex/beam_section.hpp"
+#include "scene/beam_section.hpp"
 
 #include <algorithm>
 #include <cmath>
