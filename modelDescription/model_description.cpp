@@ -162,7 +162,7 @@ std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>&
     << " variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">\n"
     << "  <CoSimulation modelIdentifier=\"" << escape(modelIdentifier) << "\""
     << " needsExecutionTool=\"false\" canHandleVariableCommunicationStepSize=\"true\""
-    << " canInterpolateInputs=\"false\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\""
+    << " canInterpolateInputs=\"" << flag(caps.canInterpolateInputs) << "\" maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\""
     << " canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\""
     << " canGetAndSetFMUstate=\"" << flag(caps.canGetAndSetFMUstate) << "\" canSerializeFMUstate=\""
     << flag(caps.canSerializeFMUstate) << "\" providesDirectionalDerivative=\"false\"/>\n";
@@ -174,6 +174,10 @@ std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>&
   x << "  <DefaultExperiment startTime=\"" << number(scene.experiment.startTime) << "\" stopTime=\""
     << number(scene.experiment.stopTime) << "\" stepSize=\"" << number(scene.experiment.outputInterval)
     << "\"/>\n";
+  // (FMI 2.0 places VendorAnnotations between DefaultExperiment and ModelVariables.)
+  if (caps.canInterpolateInputs)
+    x << "  <VendorAnnotations>\n    <Tool name=\"MFBD-FMU\">\n      <InputDerivatives maxOrder=\""
+      << caps.maxInputDerivativeOrder << "\"/>\n    </Tool>\n  </VendorAnnotations>\n";
   writeVariables(x, table);
   writeStructure(x, table);
   x << "</fmiModelDescription>\n";
