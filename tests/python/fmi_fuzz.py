@@ -60,11 +60,15 @@ ALLOWED = {
     "GetIntegerStatus": {STEP_COMPLETE, STEP_FAILED, TERMINATED},
     "GetBooleanStatus": {STEP_COMPLETE, STEP_FAILED, TERMINATED},
     "GetStringStatus": {STEP_COMPLETE, STEP_FAILED, TERMINATED},
+    # FMU state: not after an error; freeing (of NULL too) in every state.
+    "FreeFMUstate": ALL, "SetRealInputDerivatives": SET,
 }
 # Capabilities the FMU declares false: never fmi2OK.
-UNSUPPORTED = ["GetFMUstate", "SetFMUstate", "FreeFMUstate", "SerializedFMUstateSize", "SerializeFMUstate",
-               "DeSerializeFMUstate", "GetDirectionalDerivative", "SetRealInputDerivatives",
-               "GetRealOutputDerivatives"]
+UNSUPPORTED = ["GetDirectionalDerivative", "GetRealOutputDerivatives"]
+# Supported, called with NULL pointers: never fmi2OK, except freeing a NULL
+# state and setting no input derivatives (n = 0), which do nothing.
+NULL_ARGUMENTS = ["GetFMUstate", "SetFMUstate", "FreeFMUstate", "SerializedFMUstateSize", "SerializeFMUstate",
+                  "DeSerializeFMUstate", "SetRealInputDerivatives"]
 HOSTILE = [math.nan, math.inf, -math.inf, 1e300, -1e300, 5e-324, -5e-324, 0.0, -0.0, -1.0, 1e-16, 1e10,
            2.2250738585072014e-308, 4294967296.0]
 # Substep sizes that are refused (below h_min) or cheap; values from h_min
@@ -428,7 +432,7 @@ class Fuzzer:
             self.flag("accepted", f"fmi2{name} of {n} values returned OK (the FMU has Real variables only)")
 
     def unsupported(self, rng, c):
-        name = rng.choice(UNSUPPORTED)
+        name = rng.choice(UNSUPPORTED + NULL_ARGUMENTS)
         n = rng.choice([0, 1])  # counts and sizes; pointers NULL
         args = {"GetFMUstate": [None], "SetFMUstate": [None], "FreeFMUstate": [None],
                 "SerializedFMUstateSize": [None, None], "SerializeFMUstate": [None, None, n],
@@ -436,8 +440,8 @@ class Fuzzer:
                 "SetRealInputDerivatives": [None, n, None, None],
                 "GetRealOutputDerivatives": [None, n, None, None]}[name]
         status = self.call(name, c, *args)
-        if status == OK:
-            self.flag("accepted", f"fmi2{name} returned OK (declared unsupported)")
+        if status == OK and not (name == "FreeFMUstate" or (name == "SetRealInputDerivatives" and n == 0)):
+            self.flag("accepted", f"fmi2{name} returned OK ({'NULL arguments' if name in NULL_ARGUMENTS else 'declared unsupported'})")
 
     def logging(self, rng, c):
         chosen = [rng.choice(CATEGORIES) for _ in range(rng.choice([0, 1, 2]))]
