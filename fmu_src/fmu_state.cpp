@@ -10,6 +10,7 @@
 // address of such a string owned by the instance (states_), so a pointer
 // the instance did not make is refused, never dereferenced.
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <sstream>

@@ -14,26 +14,26 @@ struct InputSignals {
   static constexpr int kMaxOrder = 2;  // highest derivative order accepted
 
   Eigen::VectorXd value, d1, d2, anchor;
-  bool moving = false;  // some derivative is not zero
+  int movingCount = 0;  // inputs with a derivative that is not zero
+  bool moving = false;  // movingCount > 0
 
   void resize(int n) {
     value.setZero(n);
     d1.setZero(n);
     d2.setZero(n);
     anchor.setZero(n);
+    movingCount = 0;
     moving = false;
   }
   // Value set at time t: its derivatives restart at zero.
   void setValue(int i, double u, double t) {
     value[i] = u;
-    d1[i] = d2[i] = 0.0;
+    setDerivatives(i, 0.0, 0.0);
     anchor[i] = t;
-    moving = d1.any() || d2.any();
   }
   void setDerivative(int i, int order, double du, double t) {
-    (order == 1 ? d1 : d2)[i] = du;
+    setDerivatives(i, order == 1 ? du : d1[i], order == 2 ? du : d2[i]);
     anchor[i] = t;
-    moving = d1.any() || d2.any();
   }
   double at(int i, double t) const {
     if (!moving) return value[i];
@@ -60,7 +60,15 @@ struct InputSignals {
   }
   template <class Archive>
   void visitState(Archive& ar) {
-    ar(value, d1, d2, anchor, moving);
+    ar(value, d1, d2, anchor, movingCount, moving);
+  }
+
+ private:
+  void setDerivatives(int i, double first, double second) {
+    movingCount += int(first != 0.0 || second != 0.0) - int(d1[i] != 0.0 || d2[i] != 0.0);
+    d1[i] = first;
+    d2[i] = second;
+    moving = movingCount > 0;
   }
 };
 

@@ -44,10 +44,11 @@ def drive(s, t, steps, scale=1.0):
     return np.array(rows)
 
 
-# Closed loops (four_bar, bricard: redundant), a flexible body with its
-# kept Newton matrix turned with the rotations, inputs on a rigid tree.
+# Closed loops (four_bar, bricard: redundant), flexible bodies (the kept
+# Newton matrix turned with the rotations; block LU and KLU), inputs on a
+# rigid tree and on a flexible one, statics (load stepping).
 @pytest.mark.parametrize("name", ["pendulum", "four_bar", "bricard", "flexible_four_bar", "robot_arm",
-                                  "spin_up_beam"])
+                                  "spin_up_beam", "flexible_robot_arm", "cantilever_moment"])
 def test_restored_state_replays_bit_for_bit(name):
     s = Slave(FMUS / f"{name}.fmu")
     try:
@@ -146,6 +147,17 @@ def test_states_that_are_not_this_fmus_are_refused_and_change_nothing(tmp_path):
         assert "is not a state of this instance" in s.log[-1][2]
         assert s.call("fmi2FreeFMUstate", s.fmu.component, ctypes.byref(ctypes.c_void_p(theirs.value))) == ERROR
         assert s.call("fmi2FreeFMUstate", s.fmu.component, ctypes.byref(ctypes.c_void_p())) == OK  # NULL: nothing
+        # Frames that check out around a payload that does not parse: refused at set.
+        guid_end = 16 + len(s.md.guid)
+        rng = np.random.default_rng(7)
+        for label, payload in (("short payload", blob[guid_end + 8:-4][:-40]),
+                               ("random payload", rng.integers(0, 256, 4000, dtype=np.uint8).tobytes())):
+            framed = blob[:guid_end] + len(payload).to_bytes(8, "little") + payload
+            framed += zlib.crc32(framed).to_bytes(4, "little")
+            handle = s.fmu.deSerializeFMUstate(framed)
+            assert s.call("fmi2SetFMUstate", s.fmu.component, handle) == ERROR, label
+            assert "state refused (nothing changed)" in s.log[-1][2], (label, s.log[-1][2])
+            s.fmu.freeFMUstate(handle)
         # None of the refusals changed the instance: it continues as before.
         assert np.array_equal(drive(s, 0.02, 5), reference)
         s.fmu.freeFMUstate(state)
