@@ -5,41 +5,13 @@
 #include <exception>
 
 #include "fmi2Functions.h"
+#include "call_guard.hpp"
 #include "instance.hpp"
 
 using mfbd::FmuState;
 using mfbd::Instance;
 
-namespace {
-
-constexpr unsigned bit(FmuState s) { return static_cast<unsigned>(s); }
-constexpr unsigned kInstantiated = bit(FmuState::Instantiated);
-constexpr unsigned kInit = bit(FmuState::InitializationMode);
-constexpr unsigned kStepComplete = bit(FmuState::StepComplete);
-constexpr unsigned kStepFailed = bit(FmuState::StepFailed);
-constexpr unsigned kTerminated = bit(FmuState::Terminated);
-constexpr unsigned kError = bit(FmuState::Error);
-constexpr unsigned kAny = kInstantiated | kInit | kStepComplete | kStepFailed | kTerminated | kError;
-constexpr unsigned kGet = kInit | kStepComplete | kStepFailed | kTerminated | kError;
-constexpr unsigned kSet = kInstantiated | kInit | kStepComplete;
-constexpr unsigned kStatus = kStepComplete | kStepFailed | kTerminated;
-
-// Runs `body` on a checked instance; maps exceptions to fmi2Error.
-template <class Body>
-fmi2Status guarded(fmi2Component c, const char* function, unsigned mask, Body body) {
-  if (!c) return fmi2Error;
-  Instance* instance = static_cast<Instance*>(c);
-  if (!instance->allow(function, mask)) return fmi2Error;
-  try {
-    return body(instance);
-  } catch (const std::bad_alloc&) {
-    return instance->fail(function, "out of memory");
-  } catch (const std::exception& e) {
-    return instance->fail(function, std::string("internal error: ") + e.what());
-  }
-}
-
-}  // namespace
+using namespace mfbd;  // masks and guarded (call_guard.hpp)
 
 extern "C" {
 
@@ -143,49 +115,15 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
                  [&](Instance* i) { return i->noVariablesOfType("fmi2SetString", "String", n, vr); });
 }
 
-// Capabilities declared false in modelDescription.xml: each returns fmi2Error
-// with a log line rather than pretending.
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate*) {
-  return guarded(c, "fmi2GetFMUstate", kAny, [](Instance* i) {
-    return i->unsupported("fmi2GetFMUstate", "not supported (canGetAndSetFMUstate=false)");
-  });
-}
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate) {
-  return guarded(c, "fmi2SetFMUstate", kAny, [](Instance* i) {
-    return i->unsupported("fmi2SetFMUstate", "not supported (canGetAndSetFMUstate=false)");
-  });
-}
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate*) {
-  return guarded(c, "fmi2FreeFMUstate", kAny, [](Instance* i) {
-    return i->unsupported("fmi2FreeFMUstate", "not supported (canGetAndSetFMUstate=false)");
-  });
-}
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate, size_t*) {
-  return guarded(c, "fmi2SerializedFMUstateSize", kAny, [](Instance* i) {
-    return i->unsupported("fmi2SerializedFMUstateSize", "not supported (canSerializeFMUstate=false)");
-  });
-}
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate, fmi2Byte[], size_t) {
-  return guarded(c, "fmi2SerializeFMUstate", kAny, [](Instance* i) {
-    return i->unsupported("fmi2SerializeFMUstate", "not supported (canSerializeFMUstate=false)");
-  });
-}
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte[], size_t, fmi2FMUstate*) {
-  return guarded(c, "fmi2DeSerializeFMUstate", kAny, [](Instance* i) {
-    return i->unsupported("fmi2DeSerializeFMUstate", "not supported (canSerializeFMUstate=false)");
-  });
-}
+// FMU state (fmi2GetFMUstate ... fmi2DeSerializeFMUstate) and
+// fmi2SetRealInputDerivatives: fmu_state.cpp.
+
+// Output and directional derivatives: Instance (derivatives.cpp).
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown[], size_t nUnknown,
                                         const fmi2ValueReference vKnown[], size_t nKnown, const fmi2Real dvKnown[],
                                         fmi2Real dvUnknown[]) {
   return guarded(c, "fmi2GetDirectionalDerivative", kGet, [&](Instance* i) {
     return i->getDirectionalDerivative(vUnknown, nUnknown, vKnown, nKnown, dvKnown, dvUnknown);
-  });
-}
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference[], size_t, const fmi2Integer[],
-                                       const fmi2Real[]) {
-  return guarded(c, "fmi2SetRealInputDerivatives", kAny, [](Instance* i) {
-    return i->unsupported("fmi2SetRealInputDerivatives", "not supported (canInterpolateInputs=false)");
   });
 }
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,

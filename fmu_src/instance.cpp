@@ -87,7 +87,10 @@ Instance* Instance::create(const std::string& name, const std::string& guid, con
     c->fail("fmi2Instantiate", std::string("resources/scene.json: ") + e.what());
     return nullptr;
   }
+  c->guid_ = expected;
   c->values_.resize(c->table_.size());
+  c->derivative1_.assign(c->table_.size(), 0.0);
+  c->derivative2_.assign(c->table_.size(), 0.0);
   for (std::size_t i = 0; i < c->table_.size(); ++i) {
     c->byReference_[c->table_[i].valueReference] = i;
     c->values_[i] = c->table_[i].start;
@@ -128,19 +131,31 @@ fmi2Status Instance::setupExperiment(bool, double, double startTime, bool stopTi
   return fmi2OK;
 }
 
+std::unique_ptr<Simulation> Instance::makeSimulation(const std::vector<double>& values) const {
+  std::map<std::string, double> user;
+  for (std::size_t i = 0; i < table_.size(); ++i)
+    if (table_[i].quantity.kind == QuantityKind::UserParameter) user[table_[i].name] = values[i];
+  Scene scene = parseScene(sceneText_, user);
+  for (std::size_t i = 0; i < table_.size(); ++i)
+    if (table_[i].causality == Causality::Parameter) setSceneParameter(scene, table_[i].quantity, values[i]);
+  return std::make_unique<Simulation>(scene);
+}
+
 // Scene with the current parameter values -> Simulation at startTime.
 bool Instance::buildSimulation(const char* function) {
   try {
-    Scene scene = parseScene(sceneText_, userParameterValues());
-    for (std::size_t i = 0; i < table_.size(); ++i)
-      if (table_[i].causality == Causality::Parameter) setSceneParameter(scene, table_[i].quantity, values_[i]);
-    simulation_ = std::make_unique<Simulation>(scene);
+    simulation_ = makeSimulation(values_);
+    builtWith_ = values_;
   } catch (const SceneError& e) {
     fail(function, std::string("with the parameter values set: ") + e.what());
     return false;
   }
-  for (std::size_t i = 0; i < table_.size(); ++i)
-    if (table_[i].causality == Causality::Input) simulation_->write(table_[i].quantity, values_[i]);
+  for (std::size_t i = 0; i < table_.size(); ++i) {
+    if (table_[i].causality != Causality::Input) continue;
+    simulation_->write(table_[i].quantity, values_[i]);
+    if (derivative1_[i] != 0.0) simulation_->writeDerivative(table_[i].quantity, 1, derivative1_[i]);
+    if (derivative2_[i] != 0.0) simulation_->writeDerivative(table_[i].quantity, 2, derivative2_[i]);
+  }
   std::string message;
   std::vector<std::string> notes;
   if (!simulation_->initialize(startTime_, message, &notes)) {
@@ -202,6 +217,8 @@ fmi2Status Instance::reset() {
   simulation_.reset();
   simulationStale_ = true;
   for (std::size_t i = 0; i < table_.size(); ++i) values_[i] = table_[i].start;
+  std::fill(derivative1_.begin(), derivative1_.end(), 0.0);
+  std::fill(derivative2_.begin(), derivative2_.end(), 0.0);
   startTime_ = 0.0;
   stopTimeDefined_ = false;
   lastSuccessfulTime_ = 0.0;
@@ -334,6 +351,7 @@ fmi2Status Instance::setReal(const fmi2ValueReference vr[], std::size_t n, const
   for (std::size_t i = 0; i < n; ++i) {
     const Variable& v = table_[index[i]];
     values_[index[i]] = value[i];
+    derivative1_[index[i]] = derivative2_[index[i]] = 0.0;  // an input's value restarts its derivatives
     if (v.variability == Variability::Fixed) simulationStale_ = true;
     else if (simulation_) simulation_->write(v.quantity, value[i]);
   }

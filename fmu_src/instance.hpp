@@ -57,6 +57,18 @@ class Instance {
                                       const fmi2ValueReference known[], std::size_t nKnown, const fmi2Real dvKnown[],
                                       fmi2Real dvUnknown[]);
 
+  // FMU state and input derivatives (fmu_state.cpp). A state is the bytes
+  // of a serialized state (header, payload, CRC-32), owned by this
+  // instance until freed.
+  fmi2Status getFMUstate(fmi2FMUstate* state);
+  fmi2Status setFMUstate(fmi2FMUstate state);
+  fmi2Status freeFMUstate(fmi2FMUstate* state);
+  fmi2Status serializedFMUstateSize(fmi2FMUstate state, std::size_t* size);
+  fmi2Status serializeFMUstate(fmi2FMUstate state, fmi2Byte bytes[], std::size_t size);
+  fmi2Status deSerializeFMUstate(const fmi2Byte bytes[], std::size_t size, fmi2FMUstate* state);
+  fmi2Status setRealInputDerivatives(const fmi2ValueReference vr[], std::size_t n, const fmi2Integer order[],
+                                     const fmi2Real value[]);
+
   void log(fmi2Status status, const char* category, const std::string& message) const;
   // Whether a message of this status and category reaches the logger (so
   // that per-step messages are composed only when they will be read).
@@ -66,6 +78,14 @@ class Instance {
  private:
   Instance() = default;
   bool buildSimulation(const char* function);
+  // A Simulation of the scene with the fixed parameters of `values` (by
+  // table index), not yet initialized. Throws SceneError.
+  std::unique_ptr<Simulation> makeSimulation(const std::vector<double>& values) const;
+  // State bytes of the present instance, and their restore (all or nothing).
+  std::vector<unsigned char> saveState();
+  fmi2Status loadState(const char* function, const std::vector<unsigned char>& bytes);
+  std::vector<unsigned char>* ownedState(fmi2FMUstate state) const;
+  bool sameFixedParameters(const std::vector<double>& a, const std::vector<double>& b) const;
   // One value of a parameter or input on its own (user parameters: checkScene).
   bool checkValue(const Variable& v, double value, std::string& why) const;
   // The scene stays valid with these user parameter values.
@@ -91,6 +111,11 @@ class Instance {
   std::vector<Variable> table_;
   std::unordered_map<fmi2ValueReference, std::size_t> byReference_;
   std::vector<double> values_;  // parameters and inputs, by table index
+  // Inputs' first and second derivatives (fmi2SetRealInputDerivatives), by table index.
+  std::vector<double> derivative1_, derivative2_;
+  std::vector<double> builtWith_;  // values_ when simulation_ was built (its fixed parameters)
+  std::string guid_;
+  std::map<const void*, std::unique_ptr<std::vector<unsigned char>>> states_;  // fmi2GetFMUstate's
 
   std::unique_ptr<Simulation> simulation_;
   bool simulationStale_ = true;  // a fixed parameter changed since it was built

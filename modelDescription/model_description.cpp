@@ -193,7 +193,7 @@ std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>&
   cs.append_attribute("modelIdentifier") = modelIdentifier.c_str();
   cs.append_attribute("needsExecutionTool") = "false";
   cs.append_attribute("canHandleVariableCommunicationStepSize") = "true";
-  cs.append_attribute("canInterpolateInputs") = "false";
+  cs.append_attribute("canInterpolateInputs") = caps.canInterpolateInputs;
   cs.append_attribute("maxOutputDerivativeOrder") = maxOutputDerivativeOrder(scene);
   cs.append_attribute("canRunAsynchronuously") = "false";
   cs.append_attribute("canBeInstantiatedOnlyOncePerProcess") = "false";
@@ -212,6 +212,12 @@ std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>&
   experiment.append_attribute("startTime") = number(scene.experiment.startTime).c_str();
   experiment.append_attribute("stopTime") = number(scene.experiment.stopTime).c_str();
   experiment.append_attribute("stepSize") = number(scene.experiment.outputInterval).c_str();
+  // (FMI 2.0 places VendorAnnotations between DefaultExperiment and ModelVariables.)
+  if (caps.canInterpolateInputs) {
+    Node tool = x.append_child("VendorAnnotations").append_child("Tool");
+    tool.append_attribute("name") = "MFBD-FMU";
+    tool.append_child("InputDerivatives").append_attribute("maxOrder") = caps.maxInputDerivativeOrder;
+  }
   writeVariables(x, table);
   writeStructure(x, scene, table);
   std::ostringstream out;

@@ -9,8 +9,12 @@ namespace mfbd {
 
 // Capabilities the FMU binary honours; the XML declares exactly these.
 struct Capabilities {
-  bool canGetAndSetFMUstate = false;
-  bool canSerializeFMUstate = false;
+  bool canGetAndSetFMUstate = true;
+  bool canSerializeFMUstate = true;
+  bool canInterpolateInputs = true;
+  // Highest order fmi2SetRealInputDerivatives takes (InputSignals::kMaxOrder):
+  // FMI 2.0 has no attribute for it; a VendorAnnotations entry says it.
+  int maxInputDerivativeOrder = 2;
 };
 
 // The inputs (table indices) that output `output` depends on at a fixed

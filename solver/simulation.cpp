@@ -245,6 +245,9 @@ void Simulation::carryFlexibleBodies() {
 
 bool Simulation::initialize(double t0, std::string& message, std::vector<std::string>* notes) {
   state_.t = t0;
+  // Inputs and derivatives set before the start hold from the start time.
+  for (InputSignals* s : {&system_.jointSignals(), &system_.forceSignals(), &system_.flexibleSignals()})
+    s->anchor.setConstant(t0);
   system_.startDrives(t0);
   carryFlexibleBodies();
   if (!assembleConstraints(message, notes)) return false;
@@ -433,7 +436,7 @@ double Simulation::read(const Quantity& q) {
   if (q.kind >= QuantityKind::NodePosition) return readFlexible(q);
   const Data& data = system_.data();
   if (q.kind == QuantityKind::SpringLength) {
-    const SpringState s = springState(model.forces[q.index], system_.forceInputs(), data);
+    const SpringState s = springState(model.forces[q.index], system_.forceInputsNow(), data);
     return q.component == 0 ? s.length : q.component == 1 ? s.rate : s.force;
   }
   if (q.kind == QuantityKind::FlexibleBodyJointViolation) return system_.flexibleBodyJointViolation(q.index);
@@ -497,12 +500,62 @@ double Simulation::readFlexible(const Quantity& q) {
   }
 }
 
-// Only a value that differs counts as a change (a master may set every
-// input at every communication point).
-void Simulation::setInput(double& slot, double value) {
-  if (slot == value) return;
-  slot = value;
-  inputsChangedSinceStep_ = true;
+// Only a jump of the input's value at this time restarts the integrator
+// (doStep): a master may set every input at every communication point, and
+// an interpolating master sets the value its polynomial reached.
+void Simulation::setInput(InputSignals& signals, int i, double value) {
+  if (signals.at(i, state_.t) != value) inputsChangedSinceStep_ = true;
+  signals.setValue(i, value, state_.t);
+}
+
+InputSignals* Simulation::inputSignal(const Quantity& q, int& index) {
+  switch (q.kind) {
+    case QuantityKind::JointForceInput:
+    case QuantityKind::JointDriveRate:
+      index = system_.model().joints[jointIndex_[q.index]].inputOffset + q.component;
+      return &system_.jointSignals();
+    case QuantityKind::ForceInput: index = q.index; return &system_.forceSignals();
+    case QuantityKind::FlexibleInput: index = q.index; return &system_.flexibleSignals();
+    default: return nullptr;
+  }
+}
+
+bool Simulation::writeDerivative(const Quantity& q, int order, double value) {
+  int i = 0;
+  InputSignals* signals = inputSignal(q, i);
+  if (!signals || order < 1 || order > InputSignals::kMaxOrder) return false;
+  const double before = signals->at(i, state_.t);
+  if ((order == 1 ? signals->d1 : signals->d2)[i] == value && signals->anchor[i] == state_.t) return true;
+  signals->setDerivative(i, order, value, state_.t);
+  // The input's value at this time moves to the one set when the anchor
+  // moves: a drive rate that jumps makes the velocities jump (doStep).
+  if (signals->at(i, state_.t) != before) {
+    inputsChangedSinceStep_ = true;
+    if (q.kind == QuantityKind::JointDriveRate) driveRateChanged_ = true;
+  }
+  outputsCurrent_ = false;
+  return true;
+}
+
+void Simulation::saveState(StateWriter& ar) {
+  visitState(ar);
+  stepper_->saveState(ar);
+}
+
+void Simulation::loadState(StateReader& ar) {
+  visitState(ar);
+  stepper_->loadState(ar);
+  const Model& model = system_.model();
+  const int n = system_.velocityCount();
+  const auto sized = [n](const VectorXd& x) { return x.size() == 0 || x.size() == n; };
+  if (state_.q.scalars.size() != model.initialConfiguration.scalars.size() ||
+      state_.q.rotations.size() != model.initialConfiguration.rotations.size() || state_.v.size() != n ||
+      !sized(state_.vdot) || !sized(state_.a) || !sized(state_.pathRate) ||
+      (state_.lambda.size() != 0 && state_.lambda.size() != system_.constraintCount()) ||
+      orientation_.size() != orientationTracked_.size() || !system_.stateFits())
+    throw StateError("its sizes do not fit this scene's model");
+  outputsCurrent_ = false;
+  reactionsCurrent_ = false;
 }
 
 double& Simulation::inputSlot(const Quantity& q) {
@@ -514,20 +567,18 @@ double& Simulation::inputSlot(const Quantity& q) {
 
 bool Simulation::write(const Quantity& q, double value) {
   Model& model = system_.tunableModel();
+  int i = 0;
+  if (InputSignals* signals = inputSignal(q, i)) {
+    if (q.kind == QuantityKind::JointDriveRate && signals->at(i, state_.t) != value) driveRateChanged_ = true;
+    setInput(*signals, i, value);
+    outputsCurrent_ = false;
+    return true;
+  }
   switch (q.kind) {
     case QuantityKind::JointDamping:
       model.joints[jointIndex_[q.index]].damping = value;
       inputsChangedSinceStep_ = true;
       break;
-    case QuantityKind::JointForceInput:
-    case QuantityKind::JointDriveRate:
-    case QuantityKind::ForceInput:
-    case QuantityKind::FlexibleInput: {
-      double& slot = inputSlot(q);
-      if (q.kind == QuantityKind::JointDriveRate && slot != value) driveRateChanged_ = true;
-      setInput(slot, value);
-      break;
-    }
     case QuantityKind::FlexibleDamping: {
       const FlexibleBody& b = model.flexible.bodies[q.index];
       for (int e = 0; e < b.elementCount; ++e) model.flexible.elements[b.firstElement + e].damping = value;

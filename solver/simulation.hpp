@@ -81,8 +81,22 @@ class Simulation {
   const System& system() const { return system_; }
 
   double read(const Quantity& q);
-  // Inputs and tunable parameters; false if q is neither.
+  // Inputs and tunable parameters; false if q is neither. An input's value
+  // restarts its derivatives at zero.
   bool write(const Quantity& q, double value);
+  // Derivative of order 1 or 2 of an input at the present time: within the
+  // next steps the input follows its Taylor polynomial (InputSignals).
+  // False if q is not an input.
+  bool writeDerivative(const Quantity& q, int order, double value);
+
+  // Everything that influences the next results (integrator history and
+  // its kept Newton matrix, inputs with their derivatives, drives, tunable
+  // parameters, quaternion signs, pending input changes), as bytes. A
+  // Simulation of the same scene and fixed parameters that loads them
+  // continues bit for bit. loadState throws StateError on a blob that does
+  // not fit, and may then have changed part of the state.
+  void saveState(StateWriter& ar);
+  void loadState(StateReader& ar);
 
   // Time derivatives of order 1 or 2 of outputs at the present state, the
   // inputs held (solver/output_derivatives.cpp): kinematic ones from the
@@ -110,7 +124,12 @@ class Simulation {
   Eigen::MatrixXd constraintJacobian(const Configuration& q, const VectorXd& v);
   std::string redundantConstraints(const Configuration& q, const VectorXd& v, bool vanishing);
   double readFlexible(const Quantity& q);
-  void setInput(double& slot, double value);
+  void setInput(InputSignals& signals, int i, double value);
+  InputSignals* inputSignal(const Quantity& q, int& index);
+  template <class Archive>
+  void visitState(Archive& ar) {
+    ar(state_, orientation_, inputsChangedSinceStep_, driveRateChanged_, system_);
+  }
   double& inputSlot(const Quantity& q);  // the value of an input quantity
 
   // Output derivatives (output_derivatives.cpp).

@@ -17,6 +17,9 @@ System::System(Model model)
       jointInputs_(VectorXd::Zero(model_.jointInputCount)),
       flexibleInputs_(VectorXd::Zero(model_.flexible.inputCount)),
       forceInputs_(VectorXd::Zero(model_.forceInputCount)) {
+  jointSignals_.resize(model_.jointInputCount);
+  flexibleSignals_.resize(model_.flexible.inputCount);
+  forceSignals_.resize(model_.forceInputCount);
   startDrives(0.0);
   constraints_ = twoMarkerConstraints(model_);
   // Which coordinate block holds each rate (for per-joint perturbations).
@@ -53,7 +56,24 @@ void System::startDrives(double t0) {
 
 double System::driveCoordinate(const Joint& joint, double t) const {
   if (!joint.driveRateInput) return joint.drive(t);
-  return jointDriveStart_[&joint - model_.joints.data()] + jointInputs_[joint.inputOffset] * (t - jointDriveStepStart_);
+  return jointDriveStart_[&joint - model_.joints.data()] +
+         jointSignals_.integral(joint.inputOffset, jointDriveStepStart_, t);
+}
+
+void System::inputsAt(double t) {
+  jointSignals_.evaluate(t, jointInputs_);
+  forceSignals_.evaluate(t, forceInputs_);
+  flexibleSignals_.evaluate(t, flexibleInputs_);
+}
+
+bool System::stateFits() const {
+  const auto fits = [](const InputSignals& s, int n) {
+    return s.value.size() == n && s.d1.size() == n && s.d2.size() == n && s.anchor.size() == n;
+  };
+  return fits(jointSignals_, model_.jointInputCount) && fits(forceSignals_, model_.forceInputCount) &&
+         fits(flexibleSignals_, model_.flexible.inputCount) &&
+         drives_.startAngle.size() == model_.flexible.drives.size() &&
+         jointDriveStart_.size() == model_.joints.size();
 }
 
 void System::retract(Configuration& q, const VectorXd& dq) const { mfbd::retract(model_.blocks, q, dq); }
@@ -80,7 +100,7 @@ void System::turnOverStep(const Configuration& q, const VectorXd& v, double h, V
 
 void System::endStep(double t) {
   for (std::size_t d = 0; d < drives_.startAngle.size(); ++d)
-    drives_.startAngle[d] = drives_.angle(model_.flexible, flexibleInputs_, int(d), t);
+    drives_.startAngle[d] = drives_.angle(model_.flexible, flexibleSignals_, int(d), t);
   drives_.stepStart = t;
   for (std::size_t k = 0; k < model_.joints.size(); ++k)
     if (model_.joints[k].driveRateInput) jointDriveStart_[k] = driveCoordinate(model_.joints[k], t);
@@ -123,9 +143,10 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
 void System::residual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                       const VectorXd& lambda, VectorXd& r, VectorXd& phi) {
   r.setZero(model_.velocityCount);
+  inputsAt(t);
   bool failed = false;  // a failed iterate: the step is retried smaller
   if (!model_.flexible.empty()) {
-    flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
+    flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleSignals_, nodes_);
     const bool inertia = model_.analysis == Analysis::Dynamic;
     failed = !flexibleResidual(model_.flexible, nodes_, model_.gravity, flexibleInputs_, t, inertia, r);
   }
@@ -138,8 +159,9 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
 }
 
 void System::constraintJacobian(double t, const Configuration& q, const VectorXd& v, Triplets& jacobian) {
+  inputsAt(t);
   const VectorXd zero = VectorXd::Zero(model_.velocityCount);
-  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, zero, t, drives_, flexibleInputs_, nodes_);
+  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, zero, t, drives_, flexibleSignals_, nodes_);
   if (!model_.bodies.empty()) forwardKinematics(model_, data_, q, v, zero);
   constraintRows(false, jacobian);
 }
@@ -160,8 +182,9 @@ VectorXd System::velocityConstraints(double t, const Configuration& q, const Vec
 void System::tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                      const VectorXd& lambda, double cM, double cC, double cK, Triplets& iteration,
                      Triplets& constraintJacobian) {
+  inputsAt(t);
   const bool recursive = auxiliaryCount(cM) > 0;
-  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
+  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleSignals_, nodes_);
   if (recursive)
     recursiveTangent(t, q, v, vdot, lambda, cM, cC, cK, iteration, constraintJacobian);
   else if (!model_.bodies.empty())
@@ -202,12 +225,14 @@ double System::tangentCost() const {
 void System::evaluate(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                       const VectorXd& lambda) {
   VectorXd phi;
-  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
+  inputsAt(t);
+  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleSignals_, nodes_);
   if (!model_.bodies.empty()) rigidResidual(t, q, v, vdot, lambda, rigid_, phi);
 }
 
 void System::evaluateKinematics(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot) {
-  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleInputs_, nodes_);
+  inputsAt(t);
+  if (!model_.flexible.empty()) flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleSignals_, nodes_);
   if (!model_.bodies.empty()) forwardKinematics(model_, data_, q, v, vdot);
 }
 

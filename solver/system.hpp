@@ -6,6 +6,7 @@
 #include "flex/flexible_mesh.hpp"
 #include "integrator/dynamics.hpp"
 #include "model/data.hpp"
+#include "model/input_signals.hpp"
 #include "rigid/recursive_dynamics.hpp"
 #include "two_marker_constraints.hpp"
 
@@ -20,15 +21,23 @@ class System : public Dynamics {
   const Data& data() const { return data_; }
   const std::vector<NodeState>& nodes() const { return nodes_; }
 
-  // Generalized joint-force inputs (torques/forces along actuated DOFs).
-  VectorXd& jointInputs() { return jointInputs_; }
-  const VectorXd& jointInputs() const { return jointInputs_; }
-  // Force-element inputs: spring actuator forces, applied forces and torques.
-  VectorXd& forceInputs() { return forceInputs_; }
-  const VectorXd& forceInputs() const { return forceInputs_; }
-  // Flexible-body inputs: six per input load, one per rate-driven support.
-  VectorXd& flexibleInputs() { return flexibleInputs_; }
-  const VectorXd& flexibleInputs() const { return flexibleInputs_; }
+  // Inputs as set (values, and derivatives for interpolation in a step):
+  // generalized joint forces along actuated DOFs and joint drive rates;
+  // force-element inputs (spring actuator forces, applied forces and
+  // torques); flexible-body inputs (six per input load, one per rate-driven
+  // support).
+  InputSignals& jointSignals() { return jointSignals_; }
+  InputSignals& forceSignals() { return forceSignals_; }
+  InputSignals& flexibleSignals() { return flexibleSignals_; }
+  // Their values as set.
+  VectorXd& jointInputs() { return jointSignals_.value; }
+  const VectorXd& jointInputs() const { return jointSignals_.value; }
+  VectorXd& forceInputs() { return forceSignals_.value; }
+  const VectorXd& forceInputs() const { return forceSignals_.value; }
+  VectorXd& flexibleInputs() { return flexibleSignals_.value; }
+  const VectorXd& flexibleInputs() const { return flexibleSignals_.value; }
+  // Force-element inputs at the time of the last evaluation (outputs).
+  const VectorXd& forceInputsNow() const { return forceInputs_; }
   // Rate-input drives integrate their angle; fold it in at each step end.
   const DriveState& driveState() const { return drives_; }
   void setDriveState(const DriveState& d) { drives_ = d; }
@@ -71,6 +80,19 @@ class System : public Dynamics {
   // violation of its rows (m, rad), after evaluate().
   void flexibleBodyJointReaction(int k, const VectorXd& lambda, Vec3& force, Vec3& torque) const;
   double flexibleBodyJointViolation(int k) const;
+
+  // Every member that carries over between evaluations (inputs, drives,
+  // tunable damping); the rest is workspace or fixed by the model.
+  template <class Archive>
+  void visitState(Archive& ar) {
+    ar(jointSignals_, forceSignals_, flexibleSignals_);
+    ar(drives_.startAngle, drives_.stepStart, jointDriveStart_, jointDriveStepStart_, constraintLengthScale_);
+    for (Joint& j : model_.joints) ar(j.damping);
+    for (FlexElement& e : model_.flexible.elements) ar(e.damping);
+    drives_.samples.clear();  // a cache of time functions, recomputed alike
+  }
+  // The saved sizes match this model.
+  bool stateFits() const;
 
   // Kinematics, joint reactions and node states of a state into data() and
   // nodes() (for outputs).
@@ -125,7 +147,10 @@ class System : public Dynamics {
 
   Model model_;
   Data data_;
+  InputSignals jointSignals_, flexibleSignals_, forceSignals_;
+  // The inputs at the time of the evaluation under way (inputsAt).
   VectorXd jointInputs_, flexibleInputs_, forceInputs_;
+  void inputsAt(double t);
   DriveState drives_;
   std::vector<double> jointDriveStart_;  // per joint: a rate-input drive's coordinate at the step start
   double jointDriveStepStart_ = 0.0;

@@ -204,13 +204,18 @@ void System::constraintRows(bool bodyColumns, Triplets& constraintJacobian) {
 
 VectorXd System::constraintAccelerationTerm(double t, const Configuration& q, const VectorXd& v) {
   VectorXd gamma = VectorXd::Zero(model_.constraintCount);
+  inputsAt(t);
   forwardKinematics(model_, data_, q, v, VectorXd::Zero(model_.velocityCount));
-  // A rate input is held over the step: no acceleration.
-  for (const Joint& j : model_.joints)
+  // A rate input held over the step has no acceleration; an interpolated
+  // one has its derivative.
+  for (const Joint& j : model_.joints) {
     if (j.driven && !j.driveRateInput) gamma[j.constraintOffset] = -j.drive.acceleration(t);
+    if (j.driven && j.driveRateInput && jointSignals_.moving)
+      gamma[j.constraintOffset] = -jointSignals_.rate(j.inputOffset, t);
+  }
   // Node accelerations at vdot = 0: those of driven supports.
   if (!model_.flexibleBodyJoints.empty())
-    flexibleNodeStates(model_.flexible, q, v, VectorXd::Zero(model_.velocityCount), t, drives_, flexibleInputs_,
+    flexibleNodeStates(model_.flexible, q, v, VectorXd::Zero(model_.velocityCount), t, drives_, flexibleSignals_,
                        nodes_);
   twoMarkerAccelerationTerms(gamma);
   return gamma;

@@ -7,14 +7,14 @@
 
 namespace mfbd {
 
-double DriveState::angle(const FlexibleMesh& mesh, const VectorXd& inputs, int drive, double t) const {
+double DriveState::angle(const FlexibleMesh& mesh, const InputSignals& inputs, int drive, double t) const {
   const FlexDrive& d = mesh.drives[drive];
   if (d.inputOffset < 0) return d.angle(t);
-  return startAngle[drive] + inputs[d.inputOffset] * (t - stepStart);
+  return startAngle[drive] + inputs.integral(d.inputOffset, stepStart, t);
 }
 
 void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
-                        double t, const DriveState& drives, const VectorXd& inputs, std::vector<NodeState>& nodes) {
+                        double t, const DriveState& drives, const InputSignals& inputs, std::vector<NodeState>& nodes) {
   nodes.resize(mesh.nodes.size());
   for (std::size_t i = 0; i < mesh.nodes.size(); ++i) {
     const FlexNode& n = mesh.nodes[i];
@@ -47,8 +47,8 @@ void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const 
       double angle, rate, acceleration;
       if (d.inputOffset >= 0) {
         angle = drives.angle(mesh, inputs, n.drive, t);
-        rate = inputs[d.inputOffset];
-        acceleration = 0.0;
+        rate = inputs.at(d.inputOffset, t);
+        acceleration = inputs.rate(d.inputOffset, t);
       } else {
         if (drives.samples.size() != mesh.drives.size()) drives.samples.resize(mesh.drives.size());
         DriveState::Sample& sample = drives.samples[n.drive];

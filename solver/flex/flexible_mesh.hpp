@@ -16,6 +16,7 @@
 
 #include "flex/corotational_beam.hpp"
 #include "integrator/dynamics.hpp"
+#include "model/input_signals.hpp"
 #include "scene/scene.hpp"
 
 namespace mfbd {
@@ -90,7 +91,7 @@ struct NodeState {
 struct DriveState {
   std::vector<double> startAngle;  // rate-input drives: angle at the step start
   double stepStart = 0.0;
-  double angle(const FlexibleMesh& mesh, const VectorXd& inputs, int drive, double t) const;
+  double angle(const FlexibleMesh& mesh, const InputSignals& inputs, int drive, double t) const;
   // Angle, rate and acceleration of a time-function drive, kept for the
   // last time asked (the Newton iterations of a substep all ask at its end
   // time; rate and acceleration are finite differences, five evaluations
@@ -104,7 +105,7 @@ struct DriveState {
 };
 
 void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
-                        double t, const DriveState& drives, const VectorXd& inputs, std::vector<NodeState>& nodes);
+                        double t, const DriveState& drives, const InputSignals& inputs, std::vector<NodeState>& nodes);
 
 // What the nodes exert on element e, [f1 (world); m1 (node 1 frame); f2; m2]:
 // its internal force and, with consistent mass, its inertia minus its weight

@@ -29,6 +29,15 @@ class GeneralizedAlpha : public TimeStepper {
   // state `at`: for diagnostics (condition number against h).
   SparseMatrix newtonMatrix(Dynamics& system, const IntegratorState& at, double h) const;
 
+  void saveState(StateWriter& ar) override {
+    TimeStepper::saveState(ar);
+    visitState(ar);
+  }
+  void loadState(StateReader& ar) override {
+    TimeStepper::loadState(ar);
+    visitState(ar);
+  }
+
  protected:
   bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why) override;
   // At a communication point (where inputs may have jumped) a fresh
@@ -86,6 +95,15 @@ class GeneralizedAlpha : public TimeStepper {
   double firstRate_ = 0.0;
   double lastRate_ = 1.0;  // contraction at the last check of the previous substep (1: unknown)
   double keptRate_ = 1.0;  // contraction of the current factorization at its last check (1: not yet known)  // contraction at the first check of the last substep with a kept matrix
+
+  // Members that carry over from one substep to the next (the rest is
+  // workspace or constant): one line each.
+  template <class Archive>
+  void visitState(Archive& ar) {
+    ar(factoredStep_, correctionNoise_, elasticCoordinates_, factoredAt_);
+    ar(freshStarts_, lastIterations_, substepsSinceFactorization_, firstRate_, lastRate_, keptRate_);
+    solver_.saveOrLoad(ar);
+  }
 };
 
 }  // namespace mfbd

@@ -41,6 +41,14 @@ bool SparseAssembly::assign(int size, const std::vector<Eigen::Triplet<double>>&
   return true;
 }
 
+bool SparseAssembly::valid() const {
+  for (const Entry& e : entries_)
+    if (e.row < 0 || e.col < 0 || e.row >= matrix_.rows() || e.col >= matrix_.cols() || e.slot < 0 ||
+        e.slot >= matrix_.nonZeros())
+      return false;
+  return true;
+}
+
 #ifdef MFBD_KLU
 namespace {
 // KLU's user ordering hook: keep the columns as given (pre-permuted).
@@ -61,6 +69,7 @@ struct KluFactors {
   klu_symbolic* symbolic = nullptr;
   klu_numeric* numeric = nullptr;
   double fullPivotRatio = 0.0;  // klu_rcond of the last full factorization
+  bool lastFull = false;  // the last factorize was a full factorization (not klu_refactor)
   KluFactors() { klu_defaults(&common); }
   ~KluFactors() { release(); }
   KluFactors(const KluFactors&) = delete;
@@ -87,12 +96,14 @@ struct KluFactors {
     int* p = const_cast<int*>(A.outerIndexPtr());
     int* i = const_cast<int*>(A.innerIndexPtr());
     double* x = const_cast<double*>(A.valuePtr());
+    lastFull = false;
     if (numeric) {
       if (klu_refactor(p, i, x, symbolic, numeric, &common) && klu_rcond(symbolic, numeric, &common) &&
           common.rcond >= 1e-3 * fullPivotRatio)
         return true;
       klu_free_numeric(&numeric, &common);
     }
+    lastFull = true;
     numeric = klu_factor(p, i, x, symbolic, &common);
     if (!numeric || !klu_rcond(symbolic, numeric, &common)) return false;
     fullPivotRatio = common.rcond;
@@ -114,6 +125,7 @@ struct EigenSparseFactors {
   Eigen::SparseLU<SparseMatrix, Eigen::COLAMDOrdering<int>> fillReducing;
   Eigen::SparseLU<SparseMatrix, Eigen::NaturalOrdering<int>> inGivenOrder;
   bool ordered = false;
+  bool lastFull = false;  // every factorization is a full one: the last matrix is its history
   bool analyze(const SparseMatrix& A, bool givenOrder) {
     ordered = givenOrder;
     if (ordered) {
@@ -159,6 +171,22 @@ struct LinearSolver::Impl {
   // KLU for a factorization it refuses (factoredByBlocks false).
   BlockTridiagonal blocks;
   bool blockTridiagonal = false, factoredByBlocks = false;
+
+  // What the factors were computed from: the pattern analysed, the matrix
+  // of KLU's last full factorization (whose pivot order its
+  // refactorizations keep, so their bits depend on it) and the last matrix
+  // factorized. Replaying analyse, factorize(full), factorize(last)
+  // recomputes the same factors bit for bit (state restore), where the
+  // factors themselves (dense: n^2 numbers) would be larger to keep.
+  struct Record {
+    bool hasPattern = false, hasFull = false, hasLast = false, lastWasFull = false;
+    SparseMatrix pattern, full, last;
+    template <class Archive>
+    void visitState(Archive& ar) {
+      ar(hasPattern, hasFull, hasLast, lastWasFull, pattern, full, last);
+    }
+  } record;
+  bool replayPending = false;
 };
 
 LinearSolver::LinearSolver() : impl_(std::make_unique<Impl>()) {}
@@ -175,6 +203,36 @@ LinearSolver& LinearSolver::operator=(const LinearSolver& other) {
 
 bool LinearSolver::usesSparse() const { return impl_->sparse; }
 
+void LinearSolver::saveState(StateWriter& ar) { ar(impl_->record, impl_->pivotOrder); }
+
+void LinearSolver::loadState(StateReader& ar) {
+  Impl::Record record;
+  std::vector<std::pair<int, int>> pivotOrder;
+  ar(record, pivotOrder);
+  const auto square = [](const SparseMatrix& A) { return A.rows() == A.cols(); };
+  if (!square(record.pattern) || !square(record.full) || !square(record.last))
+    throw StateError("a saved Newton matrix is not square");
+  for (const auto& [row, column] : pivotOrder)
+    if (row < 0 || column < 0 || row >= record.pattern.rows() || column >= record.pattern.rows())
+      throw StateError("a saved pivot lies outside its matrix");
+  impl_ = std::make_unique<Impl>();
+  impl_->record = std::move(record);
+  impl_->pivotOrder = std::move(pivotOrder);
+  impl_->replayPending = true;
+}
+
+// The factors of the saved record, recomputed by the same calls.
+void LinearSolver::replay() const {
+  impl_->replayPending = false;
+  Impl::Record record = std::move(impl_->record);
+  impl_->record = Impl::Record();
+  LinearSolver& self = const_cast<LinearSolver&>(*this);
+  if (!record.hasPattern) return;
+  self.analyzePattern(record.pattern, impl_->pivotOrder);
+  if (record.hasFull) self.factorize(record.full);
+  if (record.hasLast && !(record.hasFull && record.lastWasFull)) self.factorize(record.last);
+}
+
 void LinearSolver::analyzePattern(const SparseMatrix& A, const std::vector<std::pair<int, int>>& pivotOrder) {
   // Block LU for a block-tridiagonal matrix of any size (a beam line; also
   // faster than dense LU on a short one). Dense LU for a small matrix and
@@ -182,6 +240,11 @@ void LinearSolver::analyzePattern(const SparseMatrix& A, const std::vector<std::
   // B^T M B and Phi_q B fill it), where KLU's sparse kernel is slower.
   const double size = double(A.rows());
   if (&pivotOrder != &impl_->pivotOrder) impl_->pivotOrder = pivotOrder;
+  impl_->replayPending = false;
+  Impl::Record& record = impl_->record;
+  if (&A != &record.pattern) record.pattern = A;
+  record.hasPattern = true;
+  record.hasFull = record.hasLast = record.lastWasFull = false;
   impl_->ordered = !pivotOrder.empty();
   impl_->klu.reset();
   impl_->blockTridiagonal = !impl_->ordered && impl_->blocks.analyze(A);
@@ -216,6 +279,22 @@ void LinearSolver::analyzePattern(const SparseMatrix& A, const std::vector<std::
 }
 
 LinearSolver::Status LinearSolver::factorize(const SparseMatrix& A) {
+  if (impl_->replayPending) replay();
+  if (impl_->klu) impl_->klu->lastFull = false;
+  const Status status = factorizeMatrix(A);
+  Impl::Record& record = impl_->record;
+  const bool full = impl_->klu && impl_->klu->lastFull;
+  if (full) {
+    if (&A != &record.full) record.full = A;
+    record.hasFull = true;
+  }
+  if (&A != &record.last) record.last = A;
+  record.hasLast = true;
+  record.lastWasFull = full;
+  return status;
+}
+
+LinearSolver::Status LinearSolver::factorizeMatrix(const SparseMatrix& A) {
   if (impl_->sparse) {
     if (!impl_->analyzed) analyzePattern(A, impl_->pivotOrder);
     if (!impl_->analyzed) return Status::Singular;
@@ -275,6 +354,7 @@ void loopSolve(const Eigen::PartialPivLU<Eigen::MatrixXd>& lu, const Eigen::Vect
 }  // namespace
 
 void LinearSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+  if (impl_->replayPending) replay();
   if (impl_->sparse && impl_->factoredByBlocks)
     impl_->blocks.solve(b, x);
   else if (impl_->sparse && impl_->ordered)

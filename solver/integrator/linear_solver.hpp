@@ -7,6 +7,8 @@
 
 #include <Eigen/SparseCore>
 
+#include "model/state_archive.hpp"
+
 namespace mfbd {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
@@ -21,11 +23,23 @@ class SparseAssembly {
   // Returns true when the pattern is new (a new symbolic analysis is due).
   bool assign(int size, const std::vector<Eigen::Triplet<double>>& triplets);
   const SparseMatrix& matrix() const { return matrix_; }
+  // The kept pattern decides whether the next assembly is new (and so
+  // whether the solver re-analyses): part of the integrator's state.
+  template <class Archive>
+  void visitState(Archive& ar) {
+    ar(matrix_, entries_);
+  }
+  // Every kept slot lies in the matrix (checked after a restore).
+  bool valid() const;
 
  private:
   struct Entry {
     int row, col;  // of a triplet of the kept pattern
     int slot;      // its index into matrix_.valuePtr()
+    template <class Archive>
+    void visitState(Archive& ar) {
+      ar(row, col, slot);
+    }
   };
   SparseMatrix matrix_;
   std::vector<Entry> entries_;
@@ -53,7 +67,17 @@ class LinearSolver {
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const;
   bool usesSparse() const;
 
+  // State save and restore: not the factors but what they were computed
+  // from (see Impl::Record); a restored solver recomputes them, bit for
+  // bit, at its next factorize or solve.
+  void saveState(StateWriter& ar);
+  void loadState(StateReader& ar);
+  void saveOrLoad(StateWriter& ar) { saveState(ar); }
+  void saveOrLoad(StateReader& ar) { loadState(ar); }
+
  private:
+  Status factorizeMatrix(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& A);
+  void replay() const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -14,6 +14,14 @@ class StaticEquilibrium : public TimeStepper {
   explicit StaticEquilibrium(const SolverOptions& options) : TimeStepper(options) {}
   // Equilibrium at state.t.
   bool initialize(Dynamics& system, IntegratorState& state, std::string& message) override;
+  void saveState(StateWriter& ar) override {
+    TimeStepper::saveState(ar);
+    solver_.saveState(ar);
+  }
+  void loadState(StateReader& ar) override {
+    TimeStepper::loadState(ar);
+    solver_.loadState(ar);
+  }
 
  protected:
   bool substep(Dynamics& system, IntegratorState& s, double h, std::string& why) override;

@@ -80,6 +80,11 @@ bool TimeStepper::assembleIterationMatrix(Dynamics& system, const IntegratorStat
   return iteration_.assign(newtonSize(system, cM), iterationTriplets_);
 }
 
+void TimeStepper::loadState(StateReader& ar) {
+  ar(iteration_);
+  if (!iteration_.valid()) throw StateError("the saved Newton matrix's pattern is inconsistent");
+}
+
 bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const VectorXd& violation) {
   const int n = system.velocityCount(), m = system.constraintCount();
   LinearSolver solver;

@@ -23,6 +23,11 @@ struct IntegratorState {
   long newtonIterations = 0;
   long factorizations = 0;
   long rejectedSubsteps = 0;
+
+  template <class Archive>
+  void visitState(Archive& ar) {
+    ar(t, q, v, vdot, a, lambda, pathRate, h, substeps, newtonIterations, factorizations, rejectedSubsteps);
+  }
 };
 
 struct AdvanceResult {
@@ -49,6 +54,12 @@ class TimeStepper {
   AdvanceResult advance(Dynamics& system, IntegratorState& state, double duration);
 
   const SolverOptions& options() const { return options_; }
+
+  // What influences the next substeps beyond IntegratorState: the kept
+  // Newton matrix (recomputed on restore from what it was made of) and the
+  // policy that decides when to refresh it.
+  virtual void saveState(StateWriter& ar) { ar(iteration_); }
+  virtual void loadState(StateReader& ar);
 
   // The velocity jump that restores violated velocity constraints
   // Phi_q v + Phi_t = 0 (`violation` is their value): the impulse a drive

@@ -16,6 +16,10 @@ using Eigen::VectorXd;
 struct Configuration {
   VectorXd scalars;
   std::vector<Mat3> rotations;
+  template <class Archive>
+  void visitState(Archive& ar) {
+    ar(scalars, rotations);
+  }
 };
 
 // Where the velocity coordinates v[offset .. offset+size) act: on scalars

@@ -117,9 +117,14 @@ def test_model_description_declares_only_what_works(pendulum_fmu):
     assert cs.canHandleVariableCommunicationStepSize is True
     assert cs.canNotUseMemoryManagementFunctions is True
     assert cs.needsExecutionTool is False and cs.canBeInstantiatedOnlyOncePerProcess is False
+    # FMU state and input derivatives: test_fmu_state.py, test_input_derivatives.py.
+    assert cs.canGetAndSetFMUstate is True and cs.canSerializeFMUstate is True
+    assert cs.canInterpolateInputs is True
+    with zipfile.ZipFile(pendulum_fmu) as z:
+        assert b'<InputDerivatives maxOrder="2"/>' in z.read("modelDescription.xml")
     # Not implemented yet, so declared false (their functions return fmi2Error).
-    assert cs.canGetAndSetFMUstate is False and cs.canSerializeFMUstate is False
-    assert cs.canInterpolateInputs is False
+    assert cs.canGetAndSetFMUstate is True and cs.canSerializeFMUstate is True
+    assert cs.canInterpolateInputs is True
     # Output and directional derivatives (tests/python/test_derivatives.py).
     assert cs.providesDirectionalDerivative is True and cs.maxOutputDerivativeOrder == 2
     assert md.variableNamingConvention == "structured"

@@ -1,0 +1,216 @@
+"""FMU state save and restore: a restored state replays bit for bit (in the
+same instance, and serialized into a fresh instance in another process),
+what is not a state of this FMU is refused with a message and changes
+nothing, and 10,000 get/set/free cycles leak nothing (valgrind)."""
+import ctypes
+import pathlib
+import re
+import shutil
+import subprocess
+import sys
+import zlib
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description
+
+from conftest import BUILD, ERROR, FMUS, OK, Slave
+
+HARNESS = BUILD / "tests" / "cpp" / "fmu_state_cycles"
+SUPPRESSIONS = pathlib.Path(__file__).with_name("ld_so.supp")
+H = 0.01
+
+
+def outputs_and_inputs(s):
+    outs = [v.valueReference for v in s.md.modelVariables if v.causality == "output"]
+    ins = [v.valueReference for v in s.md.modelVariables if v.causality == "input"]
+    return outs, ins
+
+
+def drive(s, t, steps, scale=1.0):
+    """Steps with inputs (and derivatives) that change every step; the
+    outputs after each, exactly."""
+    outs, ins = outputs_and_inputs(s)
+    rows = []
+    for k in range(steps):
+        if ins:
+            values = [scale * 0.05 * np.sin(3 * t + j) for j in range(len(ins))]
+            assert s.call("setReal", ins, values) == OK, s.messages()
+            if k % 2:
+                assert s.call("setRealInputDerivatives", ins, [1] * len(ins), [0.1 * scale] * len(ins)) == OK
+        assert s.step(t, H) == OK, s.messages()
+        t += H
+        rows.append(s.fmu.getReal(outs))
+    return np.array(rows)
+
+
+# Closed loops (four_bar, bricard: redundant), flexible bodies (the kept
+# Newton matrix turned with the rotations; block LU and KLU), inputs on a
+# rigid tree and on a flexible one, statics (load stepping).
+@pytest.mark.parametrize("name", ["pendulum", "four_bar", "bricard", "flexible_four_bar", "robot_arm",
+                                  "spin_up_beam", "flexible_robot_arm", "cantilever_moment"])
+def test_restored_state_replays_bit_for_bit(name):
+    s = Slave(FMUS / f"{name}.fmu")
+    try:
+        s.start()
+        drive(s, 0.0, 3)
+        state = s.fmu.getFMUstate()
+        first = drive(s, 0.03, 12)
+        s.fmu.setFMUstate(state)
+        again = drive(s, 0.03, 12)
+        assert np.array_equal(first, again)  # every output, every step, to the bit
+        # A second restore of the same state, and one after a state taken later.
+        s.fmu.setFMUstate(state)
+        assert np.array_equal(drive(s, 0.03, 12), first)
+        s.fmu.freeFMUstate(state)
+    finally:
+        s.free()
+
+
+CONTINUE = r"""
+import sys, numpy as np
+sys.path.insert(0, sys.argv[1])
+from conftest import Slave
+from test_fmu_state import drive
+s = Slave(sys.argv[2])
+assert s.instantiate()
+blob = open(sys.argv[3], "rb").read()
+state = s.fmu.deSerializeFMUstate(blob)
+s.fmu.setFMUstate(state)
+s.fmu.freeFMUstate(state)
+rows = drive(s, float(sys.argv[4]), 10)
+print(" ".join(x.hex() for x in rows.ravel()))
+s.free()
+"""
+
+
+@pytest.mark.parametrize("name", ["four_bar", "flexible_four_bar", "robot_arm"])
+def test_serialized_state_continues_in_another_process(name, tmp_path):
+    fmu = FMUS / f"{name}.fmu"
+    s = Slave(fmu)
+    try:
+        s.start()
+        drive(s, 0.0, 4)
+        state = s.fmu.getFMUstate()
+        blob = s.fmu.serializeFMUstate(state)
+        s.fmu.freeFMUstate(state)
+        here = drive(s, 0.04, 10)
+    finally:
+        s.free()
+    (tmp_path / "state.bin").write_bytes(bytes(blob))
+    run = subprocess.run([sys.executable, "-c", CONTINUE, str(pathlib.Path(__file__).parent), str(fmu),
+                          str(tmp_path / "state.bin"), "0.04"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr[-2000:]
+    there = np.array([float.fromhex(x) for x in run.stdout.split()]).reshape(here.shape)
+    assert np.array_equal(here, there)
+
+
+def raw_deserialize(s, data, size):
+    state = ctypes.c_void_p()
+    buffer = (ctypes.c_char * max(len(data), 1)).from_buffer_copy(bytes(data) or b"\0") if data is not None else None
+    return s.call("fmi2DeSerializeFMUstate", s.fmu.component, buffer, size, ctypes.byref(state)), state
+
+
+def test_states_that_are_not_this_fmus_are_refused_and_change_nothing(tmp_path):
+    s, other = Slave(FMUS / "four_bar.fmu"), Slave(FMUS / "pendulum.fmu", instance_name="other")
+    try:
+        s.start()
+        other.start()
+        drive(s, 0.0, 2)
+        state = s.fmu.getFMUstate()
+        blob = bytes(s.fmu.serializeFMUstate(state))
+        # The frame: magic, version, GUID, payload length, CRC-32 (zlib's) of the rest.
+        assert blob[:8] == b"MFBDSTAT"
+        assert int.from_bytes(blob[-4:], "little") == zlib.crc32(blob[:-4])
+        assert s.md.guid.encode() in blob[:64]
+        foreign = bytes(other.fmu.serializeFMUstate(other.fmu.getFMUstate()))
+        corrupt = bytearray(blob)
+        corrupt[len(blob) // 2] ^= 0x10
+        cases = {
+            "truncated": (blob[:-100], "truncated"),
+            "corrupted": (bytes(corrupt), "corrupted (CRC-32"),
+            "another FMU": (foreign, "belongs to another FMU (GUID"),
+            "not a state": (b"hello, world" * 4, "not an MFBD-FMU state"),
+            "empty": (b"", "null pointer or size 0"),
+        }
+        reference = drive(s, 0.02, 5)  # what the instance does next, untouched
+        s.fmu.setFMUstate(state)
+        for label, (data, message) in cases.items():
+            status, handle = raw_deserialize(s, data, len(data))
+            assert status == ERROR and not handle.value, label
+            assert message in s.log[-1][2], (label, s.log[-1][2])
+        status, _ = raw_deserialize(s, None, 0)
+        assert status == ERROR and "null pointer or size 0" in s.log[-1][2]
+        # A state of another instance (in memory) is not dereferenced.
+        theirs = other.fmu.getFMUstate()
+        assert s.call("fmi2SetFMUstate", s.fmu.component, theirs) == ERROR
+        assert "is not a state of this instance" in s.log[-1][2]
+        assert s.call("fmi2FreeFMUstate", s.fmu.component, ctypes.byref(ctypes.c_void_p(theirs.value))) == ERROR
+        assert s.call("fmi2FreeFMUstate", s.fmu.component, ctypes.byref(ctypes.c_void_p())) == OK  # NULL: nothing
+        # Frames that check out around a payload that does not parse: refused at set.
+        guid_end = 16 + len(s.md.guid)
+        rng = np.random.default_rng(7)
+        for label, payload in (("short payload", blob[guid_end + 8:-4][:-40]),
+                               ("random payload", rng.integers(0, 256, 4000, dtype=np.uint8).tobytes())):
+            framed = blob[:guid_end] + len(payload).to_bytes(8, "little") + payload
+            framed += zlib.crc32(framed).to_bytes(4, "little")
+            handle = s.fmu.deSerializeFMUstate(framed)
+            assert s.call("fmi2SetFMUstate", s.fmu.component, handle) == ERROR, label
+            assert "state refused (nothing changed)" in s.log[-1][2], (label, s.log[-1][2])
+            s.fmu.freeFMUstate(handle)
+        # None of the refusals changed the instance: it continues as before.
+        assert np.array_equal(drive(s, 0.02, 5), reference)
+        s.fmu.freeFMUstate(state)
+        other.fmu.freeFMUstate(theirs)
+    finally:
+        s.free()
+        other.free()
+
+
+def test_state_calls_follow_the_state_machine(tmp_path):
+    s = Slave(FMUS / "pendulum.fmu")
+    try:
+        assert s.instantiate()
+        instantiated = s.fmu.getFMUstate()  # before initialization: parameters and inputs only
+        s.call("setupExperiment", None, 0.0, None)
+        assert s.set("angle0", 0.3) == OK
+        s.call("enterInitializationMode")
+        s.call("exitInitializationMode")
+        drive(s, 0.0, 3)
+        assert s.get("hinge.angle") != 0.0
+        s.fmu.setFMUstate(instantiated)  # back to Instantiated, angle0 at its start value
+        assert s.call("doStep", 0.0, H, 1) == ERROR and "not allowed in state Instantiated" in s.log[-1][2]
+        s.call("setupExperiment", None, 0.0, None)
+        s.call("enterInitializationMode")
+        assert s.get("angle0") == 0.0 and s.get("hinge.angle") == 0.0
+        s.call("exitInitializationMode")
+        assert s.step(0.0, H) == OK
+        s.fmu.freeFMUstate(instantiated)
+        s.call("terminate")
+        assert s.call("fmi2GetFMUstate", s.fmu.component, ctypes.byref(ctypes.c_void_p())) == OK  # Terminated
+    finally:
+        s.free()
+
+
+@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind is installed by scripts/setup.sh")
+def test_ten_thousand_get_set_free_cycles_leak_nothing(tmp_path):
+    fmu = FMUS / "pendulum.fmu"
+    unzip = extract(str(fmu), str(tmp_path))
+    md = read_model_description(str(fmu))
+    binary = pathlib.Path(unzip) / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
+
+    def cycles(n):
+        r = subprocess.run(["valgrind", "--leak-check=full", "--errors-for-leak-kinds=definite,indirect,possible",
+                            f"--suppressions={SUPPRESSIONS}", "--error-exitcode=99", str(HARNESS), str(binary),
+                            (pathlib.Path(unzip) / "resources").as_uri(), md.guid, str(n)],
+                           capture_output=True, text=True)
+        in_use = re.search(r"in use at exit: ([\d,]+) bytes", r.stderr)
+        return r, int(in_use.group(1).replace(",", "")) if in_use else 0
+
+    few, few_in_use = cycles(100)
+    many, many_in_use = cycles(10000)
+    for r in (few, many):
+        assert r.returncode == 0, r.stderr[-3000:]
+        assert "ERROR SUMMARY: 0 errors" in r.stderr
+    assert "10000 cycles" in many.stdout
+    assert many_in_use == few_in_use
