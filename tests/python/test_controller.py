@@ -3,6 +3,7 @@ solutions of the continuous PID, refusals, FMU state, and the same packaging
 checks as the plant FMUs (fmpy validation, linux64 and win64 binaries, the
 win64 DLL under Wine against the linux64 binary)."""
 import math
+import re
 import subprocess
 import sys
 import zipfile
@@ -189,7 +190,7 @@ def test_controller_carries_linux64_for_glibc_2_17_and_win64_with_system_dlls(fm
     extract(str(fmu), str(tmp_path))
     so = tmp_path / "binaries" / "linux64" / "pid_controller.so"
     needed = subprocess.run(["readelf", "-d", str(so)], capture_output=True, text=True, check=True).stdout
-    assert set(__import__("re").findall(r"\(NEEDED\)\s+Shared library: \[(.+?)\]", needed)) <= LINUX_SYSTEM
+    assert set(re.findall(r"\(NEEDED\)\s+Shared library: \[(.+?)\]", needed)) <= LINUX_SYSTEM
     versions = set().union(*version_needs(so).values())
     assert not [v for v in versions if v.startswith(("GLIBCXX_", "CXXABI_"))]
     assert all(tuple(int(x) for x in v[6:].split(".")) <= (2, 17) for v in versions if v.startswith("GLIBC_"))
