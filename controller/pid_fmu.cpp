@@ -12,6 +12,7 @@
 #include "fmi2Functions.h"
 #include "pid.hpp"
 #include "resource_uri.hpp"
+#include "scene/number_text.hpp"
 
 namespace {
 
@@ -246,8 +247,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean) {
   const double now = ctl->state.time;
   const double scale = std::max({std::fabs(t), std::fabs(now), std::fabs(ctl->startTime)});
   if (!(std::fabs(t - now) <= 8 * 2.220446049250313e-16 * scale))
-    return ctl->fail("fmi2DoStep", "currentCommunicationPoint " + std::to_string(t) +
-                                       " is not the FMU's time " + std::to_string(now));
+    return ctl->fail("fmi2DoStep", "currentCommunicationPoint " + mfbd::numberText(t) +
+                                       " is not the FMU's time " + mfbd::numberText(now));
   if (!(h > 0) || !std::isfinite(t + h))
     return ctl->fail("fmi2DoStep", "communicationStepSize must be a finite number > 0");
   for (auto& ch : ctl->state.channels) mfbd::pid::step(ch, h);
