@@ -16,6 +16,7 @@ flexible_robot_arm:
 fmpy's simulator and libcosim are Jacobi masters: every FMU steps with the
 others' outputs of the step start, so the controller sees each measurement
 one step late."""
+import subprocess
 import sys
 
 import numpy as np
@@ -127,3 +128,14 @@ def test_libcosim_runs_the_ssp_and_tracks_the_reference(system):
     error = difference(system, times, angles)
     print(f"{name}: libcosim at H = {H}: {error:.3g} rad")
     assert error < JACOBI[name]
+
+
+def test_example_master_command_writes_every_connector(tmp_path):
+    ssp = BUILD / "ssp" / "flexible_robot_arm_pid.ssp"
+    result = subprocess.run([sys.executable, str(EXAMPLES / "ssp_master.py"), str(ssp), "--step", "0.01",
+                             "--stop-time", "0.05", "--out", str(tmp_path)], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    header, *rows = (tmp_path / "flexible_robot_arm_pid.csv").read_text().splitlines()
+    assert header.split(",") == ["time", "plant.shoulder.angle", "controller.command[1]", "plant.elbow.angle",
+                                 "controller.command[2]"]
+    assert len(rows) == 6 and float(rows[-1].split(",")[0]) == pytest.approx(0.05)
