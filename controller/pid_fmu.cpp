@@ -125,17 +125,24 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 
 void fmi2FreeInstance(fmi2Component c) { delete static_cast<Controller*>(c); }
 
-fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t, const fmi2String[]) {
-  if (!c) return fmi2Error;
-  static_cast<Controller*>(c)->logging = loggingOn;
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t n, const fmi2String categories[]) {
+  auto* ctl = static_cast<Controller*>(c);
+  if (!ctl) return fmi2Error;
+  if (n > 0 && !categories) return ctl->fail("fmi2SetDebugLogging", "null categories");
+  for (size_t i = 0; i < n; ++i)
+    if (!categories[i] || std::strcmp(categories[i], "logStatusError") != 0)
+      return ctl->fail("fmi2SetDebugLogging", "unknown log category (this FMU has logStatusError)");
+  ctl->logging = loggingOn;
   return fmi2OK;
 }
 
-fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean, fmi2Real, fmi2Real startTime, fmi2Boolean,
-                               fmi2Real) {
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean, fmi2Real, fmi2Real startTime, fmi2Boolean stopTimeDefined,
+                               fmi2Real stopTime) {
   Controller* ctl = checked(c, "fmi2SetupExperiment", {Phase::Instantiated});
   if (!ctl) return fmi2Error;
   if (!std::isfinite(startTime)) return ctl->fail("fmi2SetupExperiment", "startTime must be finite");
+  if (stopTimeDefined && !(stopTime >= startTime))
+    return ctl->fail("fmi2SetupExperiment", "stopTime must be >= startTime");
   ctl->startTime = ctl->state.time = startTime;
   return fmi2OK;
 }
@@ -172,8 +179,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
 }
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
-  Controller* ctl =
-      checked(c, "fmi2GetReal", {Phase::Instantiated, Phase::Initialization, Phase::Stepping, Phase::Terminated});
+  Controller* ctl = checked(c, "fmi2GetReal", {Phase::Initialization, Phase::Stepping, Phase::Terminated});
   if (!ctl) return fmi2Error;
   if (n > 0 && (!vr || !value)) return ctl->fail("fmi2GetReal", "null array");
   Kind kind;
@@ -290,11 +296,12 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* state) {
-  if (!c) return fmi2Error;
-  if (state) {
-    delete static_cast<mfbd::pid::State*>(*state);
-    *state = nullptr;
-  }
+  Controller* ctl = checked(c, "fmi2FreeFMUstate",
+                            {Phase::Instantiated, Phase::Initialization, Phase::Stepping, Phase::Terminated});
+  if (!ctl) return fmi2Error;
+  if (!state) return ctl->fail("fmi2FreeFMUstate", "null FMUstate pointer");
+  delete static_cast<mfbd::pid::State*>(*state);
+  *state = nullptr;
   return fmi2OK;
 }
 
@@ -345,49 +352,63 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
            : fmi2Error;
 }
 
-// No Integer, Boolean or String variables: only empty calls succeed.
-static fmi2Status noVariables(fmi2Component c, const char* function, size_t n) {
-  if (!c) return fmi2Error;
-  return n == 0 ? fmi2OK : static_cast<Controller*>(c)->fail(function, "this FMU has Real variables only");
+// No Integer, Boolean or String variables: only empty calls succeed, where a
+// call of that kind is allowed.
+static fmi2Status noVariables(fmi2Component c, const char* function, size_t n, bool get) {
+  Controller* ctl = get ? checked(c, function, {Phase::Initialization, Phase::Stepping, Phase::Terminated})
+                        : checked(c, function, {Phase::Instantiated, Phase::Initialization, Phase::Stepping});
+  if (!ctl) return fmi2Error;
+  return n == 0 ? fmi2OK : ctl->fail(function, "this FMU has Real variables only");
 }
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference[], size_t n, fmi2Integer[]) {
-  return noVariables(c, "fmi2GetInteger", n);
+  return noVariables(c, "fmi2GetInteger", n, true);
 }
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference[], size_t n, fmi2Boolean[]) {
-  return noVariables(c, "fmi2GetBoolean", n);
+  return noVariables(c, "fmi2GetBoolean", n, true);
 }
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference[], size_t n, fmi2String[]) {
-  return noVariables(c, "fmi2GetString", n);
+  return noVariables(c, "fmi2GetString", n, true);
 }
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference[], size_t n, const fmi2Integer[]) {
-  return noVariables(c, "fmi2SetInteger", n);
+  return noVariables(c, "fmi2SetInteger", n, false);
 }
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference[], size_t n, const fmi2Boolean[]) {
-  return noVariables(c, "fmi2SetBoolean", n);
+  return noVariables(c, "fmi2SetBoolean", n, false);
 }
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference[], size_t n, const fmi2String[]) {
-  return noVariables(c, "fmi2SetString", n);
+  return noVariables(c, "fmi2SetString", n, false);
 }
 
 // --- status: every step completes at once ---------------------------------------
 
+// Status functions: after a step (every step completes at once); fmi2GetStatus
+// asks about asynchronous steps, which this FMU does not make.
+static Controller* statusAllowed(fmi2Component c, const char* function, const void* value) {
+  Controller* ctl = checked(c, function, {Phase::Stepping, Phase::Terminated});
+  if (ctl && !value) {
+    ctl->fail(function, "null value pointer");
+    return nullptr;
+  }
+  return ctl;
+}
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind, fmi2Status* value) {
-  if (!c || !value) return fmi2Error;
-  *value = fmi2OK;
-  return fmi2OK;
+  Controller* ctl = statusAllowed(c, "fmi2GetStatus", value);
+  return ctl ? ctl->fail("fmi2GetStatus", "no asynchronous steps: no status to ask") : fmi2Error;
 }
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Real* value) {
-  if (!c || !value) return fmi2Error;
-  if (kind != fmi2LastSuccessfulTime) return static_cast<Controller*>(c)->fail("fmi2GetRealStatus", "unknown kind");
-  *value = static_cast<Controller*>(c)->state.time;
+  Controller* ctl = statusAllowed(c, "fmi2GetRealStatus", value);
+  if (!ctl) return fmi2Error;
+  if (kind != fmi2LastSuccessfulTime) return ctl->fail("fmi2GetRealStatus", "expected fmi2LastSuccessfulTime");
+  *value = ctl->state.time;
   return fmi2OK;
 }
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind, fmi2Integer*) {
   return c ? static_cast<Controller*>(c)->fail("fmi2GetIntegerStatus", "no integer status") : fmi2Error;
 }
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean* value) {
-  if (!c || !value) return fmi2Error;
-  if (kind != fmi2Terminated) return static_cast<Controller*>(c)->fail("fmi2GetBooleanStatus", "unknown kind");
+  Controller* ctl = statusAllowed(c, "fmi2GetBooleanStatus", value);
+  if (!ctl) return fmi2Error;
+  if (kind != fmi2Terminated) return ctl->fail("fmi2GetBooleanStatus", "expected fmi2Terminated");
   *value = fmi2False;
   return fmi2OK;
 }

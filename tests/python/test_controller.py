@@ -50,6 +50,7 @@ def test_start_values_in_the_xml_are_the_binarys(fmu):
     s = Slave(fmu)
     try:
         assert s.instantiate(), s.messages()
+        assert s.call("enterInitializationMode") == OK
         for v in md.modelVariables:
             if v.start is not None:
                 assert s.get(v.name) == float(v.start), v.name
