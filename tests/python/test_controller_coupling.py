@@ -68,3 +68,16 @@ def test_coupling_error_orders(master, order, tmp_path):
         t, x, *_ = cosim_coupling.run(cosim_coupling.linear_system, master, step, STOP, tmp_path)
         errors.append(np.max(np.abs(x - cosim_coupling.linear_exact(t))))
     assert abs(np.log2(errors[0] / errors[1]) - order) < 0.25, errors
+
+
+def test_rollback_with_a_plant_that_holds_its_inputs_is_still_trapezoidal(tmp_path):
+    # A plant without input derivatives gets the mean of the step's start and
+    # end inputs, held: for this integrator the same trapezoidal rule.
+    def holding_plant(workdir):
+        system = cosim_coupling.linear_system(workdir)
+        system.plant.can_interpolate = False
+        return system
+
+    t, x, *_ = cosim_coupling.run(holding_plant, "rollback", H, STOP, tmp_path)
+    amplification = (1 - K * H / 2) / (1 + K * H / 2)
+    assert np.max(np.abs(x[:, 0] - (1 - amplification ** np.arange(len(t))))) < 1e-10
