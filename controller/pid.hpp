@@ -22,6 +22,10 @@ namespace mfbd::pid {
 // (value reference = kind * channels + channel index).
 enum Kind : int { Setpoint, Measurement, Command, Kp, Ki, Kd, Tf, C, UMin, UMax, kKinds };
 
+// Variable names, by kind; channel k (0-based) of kind K is "<name>[k+1]".
+inline const char* const kKindNames[kKinds] = {"setpoint", "measurement", "command", "Kp", "Ki",
+                                               "Kd",       "Tf",          "c",       "u_min", "u_max"};
+
 struct Channel {
   double value[kKinds] = {0, 0, 0, 1, 0, 0, 0.01, 0, -1e20, 1e20};  // Command unused: computed
   double setpointRate = 0, measurementRate = 0;  // input derivatives for the next step

@@ -44,6 +44,9 @@ struct Controller {
     log(fmi2Error, "logStatusError", std::string(function) + ": " + why);
     return fmi2Error;
   }
+  std::string variable(fmi2ValueReference vr) const {
+    return std::string(mfbd::pid::kKindNames[vr / channels()]) + "[" + std::to_string(vr % channels() + 1) + "]";
+  }
   // The variable of a value reference, or false with the reason logged.
   bool locate(const char* function, fmi2ValueReference vr, Kind& kind, std::size_t& channel) const {
     if (vr >= mfbd::pid::kKinds * channels()) {
@@ -206,8 +209,8 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
     Kind kind;
     std::size_t k;
     if (!ctl->locate(f, vr[i], kind, k)) return fmi2Error;
-    const std::string variable = "value reference " + std::to_string(vr[i]);
-    if (kind == mfbd::pid::Command) return ctl->fail(f, variable + " is an output (command), which cannot be set");
+    const std::string variable = ctl->variable(vr[i]);
+    if (kind == mfbd::pid::Command) return ctl->fail(f, variable + " is an output, which cannot be set");
     if (!std::isfinite(value[i])) return ctl->fail(f, variable + ": expected a finite number");
     next[k].value[kind] = value[i];
     if (kind == mfbd::pid::Setpoint) next[k].setpointRate = 0;  // a new value: no ramp until one is given
@@ -216,9 +219,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t n,
   for (std::size_t k = 0; k < next.size(); ++k)
     for (int kind = mfbd::pid::Kp; kind < mfbd::pid::kKinds; ++kind) {
       const std::string why = mfbd::pid::refusal(next[k], Kind(kind), next[k].value[kind]);
-      if (!why.empty())
-        return ctl->fail(f, "value reference " + std::to_string(kind * next.size() + k) + " (channel " +
-                                std::to_string(k + 1) + "): " + why);
+      if (!why.empty()) return ctl->fail(f, ctl->variable(fmi2ValueReference(kind * next.size() + k)) + ": " + why);
     }
   ctl->state.channels.swap(next);
   return fmi2OK;
@@ -235,7 +236,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     std::size_t k;
     if (!ctl->locate(f, vr[i], kind, k)) return fmi2Error;
     if (kind != mfbd::pid::Setpoint && kind != mfbd::pid::Measurement)
-      return ctl->fail(f, "value reference " + std::to_string(vr[i]) + " is not an input");
+      return ctl->fail(f, ctl->variable(vr[i]) + " is not an input");
     if (order[i] != 1)
       return ctl->fail(f, "order " + std::to_string(order[i]) + ": expected 1 (inputs are ramped, not curved)");
     if (!std::isfinite(value[i])) return ctl->fail(f, "expected a finite derivative");
