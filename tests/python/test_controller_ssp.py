@@ -115,6 +115,8 @@ def test_libcosim_runs_the_ssp_and_tracks_the_reference(system):
     refs = {v.name.decode(): v.reference for v in execution.slave_variables(plant)}
     observer = CosimObserver.create_time_series(buffer_size=2 * int(STOP / H))
     execution.add_observer(observer)
+    last = CosimObserver.create_last_value()
+    execution.add_observer(last)
     for n in ANGLES[name]:
         observer.start_time_series(plant, value_reference=refs[n], variable_type=CosimVariableType.REAL)
     # One step past the end: the time-series observer returns no sample of
@@ -125,6 +127,11 @@ def test_libcosim_runs_the_ssp_and_tracks_the_reference(system):
         times_ns, _, values = observer.time_series_real_samples(plant, refs[n], from_step=0,
                                                                 sample_count=2 * int(STOP / H))
         times, angles[n] = np.array(times_ns) * 1e-9, np.array(values)
+    controller = execution.slave_index_from_instance_name("controller")
+    controller_refs = {v.name.decode(): v.reference for v in execution.slave_variables(controller)}
+    parameters = {p.name: float(p.value) for p in read_ssv(str(ssp), "resources/controller.ssv").parameters}
+    names = sorted(parameters)
+    assert last.last_real_values(controller, [controller_refs[n] for n in names]) == [parameters[n] for n in names]
     error = difference(system, times, angles)
     print(f"{name}: libcosim at H = {H}: {error:.3g} rad")
     assert error < JACOBI[name]
