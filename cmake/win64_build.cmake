@@ -23,7 +23,7 @@ elseif(MFBD_WIN64)
       -DMFBD_FMU_ONLY=ON
     INSTALL_COMMAND ""
     BUILD_ALWAYS ON  # its own build tool decides what is out of date
-    BUILD_BYPRODUCTS "${MFBD_FMU_BINARY_ROOT}/win64/mfbd_fmu.dll"
+    BUILD_BYPRODUCTS "${MFBD_FMU_BINARY_ROOT}/win64/mfbd_fmu.dll" "${MFBD_FMU_BINARY_ROOT}/win64/pid_controller.dll"
     USES_TERMINAL_BUILD ON)
   # The FMUs are packed again when the DLL changes.
   set(MFBD_WIN64_TARGET win64 "${MFBD_FMU_BINARY_ROOT}/win64/mfbd_fmu.dll")

@@ -30,3 +30,6 @@ done
 # then the same chain through the FMU beside Exudyn's KinematicTree.
 .venv/bin/python benchmarks/chain_cost.py --out "$out"
 .venv/bin/python benchmarks/peer_chain_cost.py --out "$out"
+# Co-simulation: closed-loop coupling error against the communication step for
+# four masters (zero-order hold Jacobi and Gauss-Seidel, interpolation, rollback).
+.venv/bin/python benchmarks/cosim_coupling.py --out "$out"

@@ -3,11 +3,21 @@
 the way a controller FMU or a master script would: set the six joint torques,
 step, read the joint angles and rates. Writes a CSV and a plot.
 
+The gravity compensation is a static model of the arm read from the FMU
+itself (its resources/scene.json: masses, centres of mass, joint positions
+and axes, gravity): at the present angles q, each joint gets the torque
+that holds the bodies beyond it against gravity,
+G_i(q) = -sum_j (a_i x (c_j - p_i)) . m_j g, with the axis a_i, the joint
+origin p_i and the centres c_j turned by the joints (revolute joints in a
+tree). Without it the PD loop sags under gravity (--no-gravity).
+
     python examples/robot_arm/control.py build/fmus/robot_arm.fmu --out out
 """
 import argparse
+import json
 import pathlib
 import sys
+import zipfile
 
 import numpy as np
 
@@ -21,7 +31,54 @@ TARGET = np.array([0.8, -0.6, 1.0, 0.3, -0.5, 0.7])  # rad, from the design conf
 KP, KD = np.array([400, 900, 500, 4, 20, 1.0]), np.array([60, 120, 60, 0.5, 2, 0.1])
 
 
-def run(fmu_path, stop=3.0, step=1e-3, gravity_probe=1e-6):
+def rotation(axis, angle):
+    """Rotation matrix about a unit axis (Rodrigues)."""
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+
+
+class GravityModel:
+    """Static gravity torques of a tree of revolute joints, from the scene
+    packed in the FMU (numbers only, bodies' centres of mass at their
+    frames' origins plus center_of_mass in the design orientation)."""
+
+    def __init__(self, fmu_path):
+        with zipfile.ZipFile(fmu_path) as z:
+            scene = json.loads(z.read("resources/scene.json"))
+        self.g = np.array(scene["gravity"], dtype=float)
+        self.joints = scene["joints"]
+        if any(j["type"] != "revolute" for j in self.joints):
+            raise ValueError("GravityModel: revolute joints only")
+        self.bodies = {b["name"]: (float(b["mass"]), np.add(b["position"], b.get("center_of_mass", [0, 0, 0])))
+                       for b in scene["bodies"]}
+
+    def torques(self, q):
+        """-sum over the bodies beyond each joint of (a x (c - p)) . m g, posed at q."""
+        pose = {"ground": (np.eye(3), np.zeros(3))}  # body -> (R, t): design point x is at R x + t
+        frames = []
+        for joint, angle in zip(self.joints, q):  # scene order: parents before children
+            R0, t0 = pose[joint["parent"]]
+            p = np.array(joint["position"], dtype=float)
+            a = np.array(joint["axis"], dtype=float) / np.linalg.norm(joint["axis"])
+            Rj = rotation(a, angle)
+            pose[joint["child"]] = (R0 @ Rj, R0 @ (p - Rj @ p) + t0)
+            frames.append((R0 @ a, R0 @ p + t0, joint["child"]))
+        children = {j["child"]: j["parent"] for j in self.joints}
+        G = np.zeros(len(self.joints))
+        for name, (m, c) in self.bodies.items():
+            R, t = pose[name]
+            weight_arm = R @ c + t
+            for i, (axis, origin, child) in enumerate(frames):
+                body = name
+                while body != "ground" and body != child:
+                    body = children[body]
+                if body == child:
+                    G[i] -= np.cross(axis, weight_arm - origin) @ (m * self.g)
+        return G
+
+
+def run(fmu_path, stop=3.0, step=1e-3, gravity=True):
+    model = GravityModel(fmu_path)
     with running_fmu(fmu_path, "arm") as (fmu, vr):
         angles = [vr[f"j{i}.angle"] for i in range(1, 7)]
         rates = [vr[f"j{i}.angle_rate"] for i in range(1, 7)]
@@ -29,7 +86,7 @@ def run(fmu_path, stop=3.0, step=1e-3, gravity_probe=1e-6):
         t, rows = 0.0, []
         while t < stop - 1e-12:
             q, qd = np.array(fmu.getReal(angles)), np.array(fmu.getReal(rates))
-            tau = KP * (TARGET - q) - KD * qd
+            tau = KP * (TARGET - q) - KD * qd + (model.torques(q) if gravity else 0.0)
             fmu.setReal(torques, list(tau))
             fmu.doStep(t, step)
             t += step
@@ -41,8 +98,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("fmu", type=pathlib.Path)
     parser.add_argument("--out", type=pathlib.Path, default=pathlib.Path("out"))
+    parser.add_argument("--no-gravity", action="store_true", help="PD alone: the arm sags")
     args = parser.parse_args()
-    data = run(args.fmu)
+    data = run(args.fmu, gravity=not args.no_gravity)
     args.out.mkdir(parents=True, exist_ok=True)
     header = "time," + ",".join(f"j{i}.angle" for i in range(1, 7)) + "," + ",".join(f"j{i}.torque" for i in range(1, 7))
     np.savetxt(args.out / "robot_arm.csv", data, delimiter=",", header=header, comments="")

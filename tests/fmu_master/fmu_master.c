@@ -4,7 +4,9 @@
  * importer does), runs fixed communication steps and prints the time and
  * the requested reals, one row per step, with 17 significant digits.
  *
- * usage: fmu_master BINARY RESOURCES GUID START STOP STEP VR...
+ * usage: fmu_master BINARY RESOURCES GUID START STOP STEP VR... [VR=VALUE...]
+ * A VR=VALUE argument sets that real before initialization (a parameter's or
+ * an input's start value); the other VRs are printed.
  * Exit status 0 when every call returned fmi2OK, else 1 (the FMU's log on
  * stderr). tests/python/test_platforms.py runs it on linux64 and, under
  * Wine, on win64, and compares the rows. */
@@ -73,7 +75,7 @@ static int resourceUri(const char *folder, char *uri, size_t size) {
 
 int main(int argc, char **argv) {
   if (argc < 8) {
-    fprintf(stderr, "usage: fmu_master BINARY RESOURCES GUID START STOP STEP VR...\n");
+    fprintf(stderr, "usage: fmu_master BINARY RESOURCES GUID START STOP STEP VR... [VR=VALUE...]\n");
     return 2;
   }
   void *lib = LOAD(argv[1]);
@@ -87,6 +89,7 @@ int main(int argc, char **argv) {
   FUNCTION(fmi2ExitInitializationModeTYPE *, fmi2ExitInitializationMode)
   FUNCTION(fmi2DoStepTYPE *, fmi2DoStep)
   FUNCTION(fmi2GetRealTYPE *, fmi2GetReal)
+  FUNCTION(fmi2SetRealTYPE *, fmi2SetReal)
   FUNCTION(fmi2TerminateTYPE *, fmi2Terminate)
   FUNCTION(fmi2FreeInstanceTYPE *, fmi2FreeInstance)
 
@@ -96,16 +99,27 @@ int main(int argc, char **argv) {
     return 1;
   }
   const double start = atof(argv[4]), stop = atof(argv[5]), step = atof(argv[6]);
-  const size_t count = (size_t)(argc - 7);
-  fmi2ValueReference *references = calloc(count, sizeof *references);
-  double *values = calloc(count, sizeof *values);
-  for (size_t i = 0; i < count; ++i) references[i] = (fmi2ValueReference)strtoul(argv[7 + i], NULL, 10);
+  size_t count = 0, starts = 0;
+  fmi2ValueReference *references = calloc((size_t)argc, sizeof *references);
+  fmi2ValueReference *startReferences = calloc((size_t)argc, sizeof *startReferences);
+  double *values = calloc((size_t)argc, sizeof *values), *startValues = calloc((size_t)argc, sizeof *startValues);
+  for (int i = 7; i < argc; ++i) {
+    char *end = NULL;
+    const fmi2ValueReference vr = (fmi2ValueReference)strtoul(argv[i], &end, 10);
+    if (*end == '=') {
+      startReferences[starts] = vr;
+      startValues[starts++] = strtod(end + 1, NULL);
+    } else {
+      references[count++] = vr;
+    }
+  }
 
   const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
   fmi2Component c = fmi2Instantiate("master", fmi2CoSimulation, argv[3], uri, &callbacks, fmi2False, fmi2False);
   if (!c) return 1;
   const long steps = lround((stop - start) / step);
   int ok = fmi2SetupExperiment(c, fmi2False, 0.0, start, fmi2True, stop) == fmi2OK &&
+           (starts == 0 || fmi2SetReal(c, startReferences, starts, startValues) == fmi2OK) &&
            fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK;
   for (long n = 0; ok && n <= steps; ++n) {
     const double t = start + (double)n * step;  /* no drift from repeated sums */
@@ -120,5 +134,7 @@ int main(int argc, char **argv) {
   fmi2FreeInstance(c);
   free(references);
   free(values);
+  free(startReferences);
+  free(startValues);
   return ok ? 0 : 1;
 }
