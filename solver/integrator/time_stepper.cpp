@@ -80,19 +80,27 @@ bool TimeStepper::assembleIterationMatrix(Dynamics& system, const IntegratorStat
   return iteration_.assign(newtonSize(system, cM), iterationTriplets_);
 }
 
+bool TimeStepper::solveOnce(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
+                            const VectorXd& rhs, int refinements, VectorXd& x) {
+  LinearSolver solver;
+  const SparseMatrix A = iterationMatrix(system, at, cM, cC, cK);
+  solver.analyzePattern(A, pivotOrder(system, cM));
+  if (solver.factorize(A) != LinearSolver::Status::Ok) return false;
+  x = solver.solve(rhs);
+  if (refinements > 0) {
+    const SparseMatrix exact = unregularized(system, A);
+    for (int sweep = 0; sweep < refinements; ++sweep) x += solver.solve(rhs - exact * x);
+  }
+  return true;
+}
+
 bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const VectorXd& violation) {
   const int n = system.velocityCount(), m = system.constraintCount();
-  LinearSolver solver;
-  const SparseMatrix A = iterationMatrix(system, state, 1.0, 0.0, 0.0);
-  solver.analyzePattern(A, pivotOrder(system, 1.0));
-  if (solver.factorize(A) != LinearSolver::Status::Ok) return false;
-  VectorXd rhs = VectorXd::Zero(A.rows());
+  VectorXd rhs = VectorXd::Zero(newtonSize(system, 1.0));
   rhs.segment(n, m) = -violation;
-  VectorXd x = solver.solve(rhs);
   // Refinement against the unregularised matrix meets the constraints exactly.
-  const SparseMatrix exact = unregularized(system, A);
-  for (int sweep = 0; sweep < 3; ++sweep) x += solver.solve(rhs - exact * x);
-  if (!x.allFinite()) return false;
+  VectorXd x;
+  if (!solveOnce(system, state, 1.0, 0.0, 0.0, rhs, 3, x) || !x.allFinite()) return false;
   state.v += x.head(n);
   return true;
 }

@@ -67,6 +67,11 @@ class TimeStepper {
   // The same without the regularisation (eps = 0): the multipliers'
   // diagonal holds nothing else, so it is set to zero (no second tangent).
   static SparseMatrix unregularized(const Dynamics& system, SparseMatrix S);
+  // Builds the Newton matrix at `at`, factorises it (a factorization of its
+  // own), solves for rhs and refines the solution `refinements` times
+  // against the unregularised matrix. False if the matrix is singular.
+  static bool solveOnce(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
+                        const VectorXd& rhs, int refinements, VectorXd& x);
   // The same (regularised) matrix into assembledIterationMatrix(), reusing
   // the pattern and the triplet storage of the previous call; true when the
   // pattern is new and needs a symbolic analysis.
