@@ -88,6 +88,7 @@ class Instance {
   double startTime_ = 0.0;
   bool stopTimeDefined_ = false;
   double stopTime_ = 0.0;
+  double tolerance_ = 0.0;  // fmi2SetupExperiment's relative tolerance; 0: not defined
   double lastSuccessfulTime_ = 0.0;
   bool terminatedBySlave_ = false;
 };

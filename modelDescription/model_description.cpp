@@ -172,8 +172,8 @@ std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>&
     x << "    <Category name=\"" << name << "\" description=\"" << escape(description) << "\"/>\n";
   x << "  </LogCategories>\n";
   x << "  <DefaultExperiment startTime=\"" << number(scene.experiment.startTime) << "\" stopTime=\""
-    << number(scene.experiment.stopTime) << "\" stepSize=\"" << number(scene.experiment.outputInterval)
-    << "\"/>\n";
+    << number(scene.experiment.stopTime) << "\" tolerance=\"" << number(scene.experiment.tolerance)
+    << "\" stepSize=\"" << number(scene.experiment.outputInterval) << "\"/>\n";
   writeVariables(x, table);
   writeStructure(x, table);
   x << "</fmiModelDescription>\n";

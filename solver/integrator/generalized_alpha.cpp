@@ -3,6 +3,8 @@
 #include <cmath>
 #include <limits>
 
+#include "scene/number_text.hpp"
+
 namespace mfbd {
 
 GeneralizedAlpha::GeneralizedAlpha(const SolverOptions& options) : TimeStepper(options) {
@@ -37,6 +39,7 @@ bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std:
   state.vdot = x.head(n);
   state.lambda = x.segment(n, m);
   state.a = state.vdot;
+  state.hBefore = 0.0;
   if (!allFinite(state.vdot) || !allFinite(state.lambda)) {
     message = "initial accelerations are not finite";
     return false;
@@ -73,6 +76,7 @@ bool GeneralizedAlpha::restartAfterInputJump(Dynamics& system, IntegratorState& 
   s.vdot += jump.head(n);
   s.a += jump.head(n);
   s.lambda += jump.segment(n, m);
+  s.hBefore = 0.0;  // the accelerations jumped: nothing to extrapolate from
   return true;
 }
 
@@ -237,19 +241,56 @@ class SubstepNewton : public NewtonSystem {
   double betaPrime_, gammaPrime_;
 };
 
-bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
-  // Predictor: vdot_{n+1} = vdot_n, with the world-frame accelerations of
-  // spinning bodies' points turned as far as the bodies turn in h (the
-  // centripetal acceleration turns with the body: F4's first Newton
-  // correction 1.4e-4 -> 7e-6 m at n = 2, h = 8e-3).
-  IntegratorState& trial = trial_;
-  trial = s;
-  trial.t = s.t + h;
-  system.turnOverStep(s.q, s.v, h, trial.vdot);
+// Local error estimate of the substep, in the position coordinates (m,
+// rad) of the chart at its start (Geradin & Cardona 2001, ch. 7, for the
+// Newmark family): the substep's increment h v_n + h^2 ((1/2 - beta) a_n +
+// beta a_{n+1}) against a Taylor increment one order higher, h v_n + h^2
+// (vdot_n / 3 + vdot_{n+1} / 6) (the third derivative taken as the
+// difference of the accelerations at the ends over h), so
+//   e = h^2 [(1/2 - beta) a_n + beta a_{n+1} - vdot_n / 3 - vdot_{n+1} / 6],
+// O(h^3) on smooth motion. Stiff modes that the step does not resolve show
+// in it as large differences of the accelerations at the two ends.
+double GeneralizedAlpha::localError(const IntegratorState& s, const IntegratorState& trial, double h) const {
+  double largest = 0.0;
+  for (int i = 0; i < s.vdot.size(); ++i) {
+    const double e = (0.5 - beta_) * s.a[i] + beta_ * trial.a[i] - s.vdot[i] / 3.0 - trial.vdot[i] / 6.0;
+    largest = std::max(largest, std::abs(e));
+  }
+  return h * h * largest;
+}
+
+// Predictor of vdot and lambda at the substep's end. Rigid systems: linear
+// extrapolation from the last two substeps' starts, vdot_n + h/h_{n-1}
+// (vdot_n - vdot_{n-1}), which leaves an O(h^2) first correction of vdot
+// where vdot_{n+1} = vdot_n leaves O(h) (Newton then starts closer, and
+// the matrix kept across substeps contracts the rest in fewer
+// corrections). Where stiff forces read the coordinates the accelerations
+// ring at frequencies the step does not resolve, and the extrapolation
+// would amplify the ringing: vdot_n, with the world-frame accelerations of
+// spinning bodies' points turned as far as the bodies turn in h (the
+// centripetal acceleration turns with the body: F4's first Newton
+// correction 1.4e-4 -> 7e-6 m at n = 2, h = 8e-3).
+void GeneralizedAlpha::predict(Dynamics& system, const IntegratorState& s, double h, IntegratorState& trial) {
+  const bool history = s.hBefore > 0.0 && s.vdotBefore.size() == s.vdot.size() &&
+                       s.lambdaBefore.size() == s.lambda.size();
+  if (history && !system.elasticCoordinates()) {
+    const double ratio = h / s.hBefore;
+    trial.vdot = s.vdot + ratio * (s.vdot - s.vdotBefore);
+    trial.lambda = s.lambda + ratio * (s.lambda - s.lambdaBefore);
+  } else {
+    system.turnOverStep(s.q, s.v, h, trial.vdot);
+  }
   trial.a = ((1.0 - alphaF_) * trial.vdot + alphaF_ * s.vdot - alphaM_ * s.a) / (1.0 - alphaM_);
   trial.v = s.v + h * (1.0 - gamma_) * s.a + h * gamma_ * trial.a;
   hDeltaQ_ = h * s.v + h * h * (0.5 - beta_) * s.a + h * h * beta_ * trial.a;
   system.retract(trial.q, hDeltaQ_);
+}
+
+bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
+  IntegratorState& trial = trial_;
+  trial = s;
+  trial.t = s.t + h;
+  predict(system, s, h, trial);
 
   SubstepNewton problem(*this, system, s, trial, h);
   // The tolerance holds for the error left in q (m, rad), v (per s) and
@@ -263,7 +304,18 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
   s.newtonIterations = trial.newtonIterations;
   s.factorizations = trial.factorizations;
   if (!converged) return false;
+  if (errorControlled()) {
+    errorRatio_ = localError(s, trial, h) / (options_.errorTolerance * options_.errorScale);
+    if (!(errorRatio_ <= 1.0)) {
+      errorRejected_ = true;
+      why = "local error estimate " + numberText(errorRatio_) + " times the tolerance";
+      return false;
+    }
+  }
   trial.substeps = s.substeps + 1;
+  trial.vdotBefore = s.vdot;
+  trial.lambdaBefore = s.lambda;
+  trial.hBefore = h;
   trial.rejectedSubsteps = s.rejectedSubsteps;
   if (alphaM_ == alphaF_ && system.constraintCount() > 0) projectVelocities(system, trial, problem.gammaPrime());
   std::swap(s, trial);  // trial keeps s's buffers for the next substep

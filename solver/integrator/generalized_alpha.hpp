@@ -39,10 +39,13 @@ class GeneralizedAlpha : public TimeStepper {
  protected:
   bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why) override;
   void beginAdvance(const Dynamics& system) override { refresh_.beginAdvance(system.tangentCost()); }
+  bool errorControlled() const override { return options_.errorTolerance > 0.0; }
 
  private:
   friend class SubstepNewton;
   bool factorize(Dynamics& system, const IntegratorState& trial, double h);
+  double localError(const IntegratorState& s, const IntegratorState& trial, double h) const;
+  void predict(Dynamics& system, const IntegratorState& s, double h, IntegratorState& trial);
   // Factors of M, C and K in the scaled Newton matrix: 1, gamma'/beta', 1/beta'.
   struct MatrixFactors {
     double cM, cC, cK;

@@ -144,7 +144,13 @@ bool MatrixRefreshPolicy::diverging(const NewtonIterate& it, const Assessment& a
   if (kind_ == Kind::Full) return false;
   const bool elastic = memory.elasticCoordinates;
   const int left = elastic ? maxIterations - 1 - it.k : 4;
-  const bool tooSlow = left <= 4 && a.rho < 1.0 && std::pow(a.rho, left) * a.remaining > a.resolved;
+  // The iteration ends at the target or at two corrections below the
+  // round-off floor, whichever is larger: a rate that reaches that within
+  // the corrections left is fast enough (a target below the floor, as the
+  // vdot-level target of a rigid system at h = 1e-3, refreshed the matrix
+  // about every 1.5 substeps of a double pendulum).
+  const bool tooSlow =
+      left <= 4 && a.rho < 1.0 && std::pow(a.rho, left) * a.remaining > std::max(a.resolved, a.floor);
   if (!(it.k > 0 && (it.size > 0.25 * it.previous || tooSlow) && it.size > (elastic ? 10.0 : 1.0) * a.floor))
     return false;
   memory.factoredStep = 0.0;  // refactorise at the next iteration
