@@ -150,15 +150,21 @@ double GeneralizedAlpha::constraintNoise(const Dynamics& system, int n, int m, i
 // gamma'], through the factorised Newton matrix (S ~ M for the step: the
 // least change in the mass metric, to O(h)).
 void GeneralizedAlpha::projectVelocities(Dynamics& system, IntegratorState& trial, double gammaPrime) {
+  // Two sweeps: the matrix is kept over many substeps, and its constraint
+  // rows (those of its origin) remove most of the violation, the second
+  // sweep the rest.
   const int n = system.velocityCount(), m = system.constraintCount();
-  const VectorXd violation = system.velocityConstraints(trial.t, trial.q, trial.v);
-  if (violation.size() != m) return;
-  rhs_.setZero(assembledIterationMatrix().rows());
-  rhs_.segment(n, m) = -violation / gammaPrime;
-  system.turnWithRotations(refresh_.memory.origin.q, trial.q, rhs_, true);
-  solver_.solve(rhs_, delta_);
-  system.turnWithRotations(refresh_.memory.origin.q, trial.q, delta_, false);
-  if (delta_.allFinite()) trial.v += gammaPrime * delta_.head(n);
+  for (int sweep = 0; sweep < 2; ++sweep) {
+    const VectorXd violation = system.velocityConstraints(trial.t, trial.q, trial.v);
+    if (violation.size() != m) return;
+    rhs_.setZero(assembledIterationMatrix().rows());
+    rhs_.segment(n, m) = -violation / gammaPrime;
+    system.turnWithRotations(refresh_.memory.origin.q, trial.q, rhs_, true);
+    solver_.solve(rhs_, delta_);
+    system.turnWithRotations(refresh_.memory.origin.q, trial.q, delta_, false);
+    if (!delta_.allFinite()) return;
+    trial.v += gammaPrime * delta_.head(n);
+  }
 }
 
 // The Newton problem of one substep: corrections dq of the increment h
