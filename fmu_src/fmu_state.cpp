@@ -72,11 +72,12 @@ struct InstanceFields {
   std::vector<double> values, derivative1, derivative2, builtWith;
   bool simulationStale = true, stopTimeDefined = false, terminatedBySlave = false, hasSimulation = false;
   double startTime = 0.0, stopTime = 0.0, lastSuccessfulTime = 0.0;
+  double tolerance = 0.0;  // fmi2SetupExperiment's, the Simulation's error tolerance
   template <class Archive>
   void visitState(Archive& ar) {
     ar(mode, values, derivative1, derivative2, builtWith);
     ar(simulationStale, stopTimeDefined, terminatedBySlave, hasSimulation);
-    ar(startTime, stopTime, lastSuccessfulTime);
+    ar(startTime, stopTime, lastSuccessfulTime, tolerance);
   }
 };
 
@@ -89,7 +90,7 @@ std::vector<unsigned char> Instance::saveState() {
   append(out, std::uint64_t(0));
   InstanceFields f{static_cast<unsigned>(state_), values_, derivative1_, derivative2_,
                    simulation_ ? builtWith_ : std::vector<double>(), simulationStale_, stopTimeDefined_,
-                   terminatedBySlave_, simulation_ != nullptr, startTime_, stopTime_, lastSuccessfulTime_};
+                   terminatedBySlave_, simulation_ != nullptr, startTime_, stopTime_, lastSuccessfulTime_, tolerance_};
   StateWriter ar(out);
   ar(f);
   if (simulation_) simulation_->saveState(ar);
@@ -167,7 +168,7 @@ fmi2Status Instance::loadState(const char* function, const std::vector<unsigned 
     if (f.values.size() != n || f.derivative1.size() != n || f.derivative2.size() != n ||
         (f.hasSimulation && f.builtWith.size() != n) || !(f.mode & modes) || (f.mode & (f.mode - 1u)))
       throw StateError("its instance fields do not fit this FMU");
-    if (f.hasSimulation && simulation_ && sameFixedParameters(builtWith_, f.builtWith)) {
+    if (f.hasSimulation && simulation_ && sameFixedParameters(builtWith_, f.builtWith) && f.tolerance == tolerance_) {
       std::vector<unsigned char> backup;
       StateWriter keep(backup);
       simulation_->saveState(keep);
@@ -180,7 +181,7 @@ fmi2Status Instance::loadState(const char* function, const std::vector<unsigned 
         throw;
       }
     } else if (f.hasSimulation) {
-      fresh = makeSimulation(f.builtWith);
+      fresh = makeSimulation(f.builtWith, f.tolerance);
       fresh->loadState(ar);
     }
     if (!ar.atEnd()) throw StateError("bytes are left after its last field");
@@ -193,6 +194,7 @@ fmi2Status Instance::loadState(const char* function, const std::vector<unsigned 
   if (fresh) simulation_ = std::move(fresh);
   if (!f.hasSimulation) simulation_.reset();
   if (f.hasSimulation) builtWith_ = std::move(f.builtWith);
+  tolerance_ = f.tolerance;
   state_ = static_cast<FmuState>(f.mode);
   values_ = std::move(f.values);
   derivative1_ = std::move(f.derivative1);

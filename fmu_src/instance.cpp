@@ -121,30 +121,36 @@ fmi2Status Instance::setDebugLogging(bool on, std::size_t n, const fmi2String ca
   return fmi2OK;
 }
 
-fmi2Status Instance::setupExperiment(bool, double, double startTime, bool stopTimeDefined, double stopTime) {
+fmi2Status Instance::setupExperiment(bool toleranceDefined, double tolerance, double startTime, bool stopTimeDefined,
+                                     double stopTime) {
   if (!std::isfinite(startTime)) return fail("fmi2SetupExperiment", "startTime must be finite");
   if (stopTimeDefined && !(stopTime >= startTime))
     return fail("fmi2SetupExperiment", "stopTime must be >= startTime");
+  if (toleranceDefined && !(tolerance >= 1e-12 && tolerance < 1.0))
+    return fail("fmi2SetupExperiment", "tolerance must be a relative tolerance in [1e-12, 1), got " +
+                                           numberText(tolerance));
+  tolerance_ = toleranceDefined ? tolerance : 0.0;
   startTime_ = startTime;
   stopTimeDefined_ = stopTimeDefined;
   stopTime_ = stopTime;
   return fmi2OK;
 }
 
-std::unique_ptr<Simulation> Instance::makeSimulation(const std::vector<double>& values) const {
+std::unique_ptr<Simulation> Instance::makeSimulation(const std::vector<double>& values, double tolerance) const {
   std::map<std::string, double> user;
   for (std::size_t i = 0; i < table_.size(); ++i)
     if (table_[i].quantity.kind == QuantityKind::UserParameter) user[table_[i].name] = values[i];
   Scene scene = parseScene(sceneText_, user);
   for (std::size_t i = 0; i < table_.size(); ++i)
     if (table_[i].causality == Causality::Parameter) setSceneParameter(scene, table_[i].quantity, values[i]);
+  scene.solver.errorTolerance = tolerance;
   return std::make_unique<Simulation>(scene);
 }
 
 // Scene with the current parameter values -> Simulation at startTime.
 bool Instance::buildSimulation(const char* function) {
   try {
-    simulation_ = makeSimulation(values_);
+    simulation_ = makeSimulation(values_, tolerance_);
     builtWith_ = values_;
   } catch (const SceneError& e) {
     fail(function, std::string("with the parameter values set: ") + e.what());
@@ -221,6 +227,7 @@ fmi2Status Instance::reset() {
   std::fill(derivative2_.begin(), derivative2_.end(), 0.0);
   startTime_ = 0.0;
   stopTimeDefined_ = false;
+  tolerance_ = 0.0;
   lastSuccessfulTime_ = 0.0;
   terminatedBySlave_ = false;
   state_ = FmuState::Instantiated;
@@ -399,6 +406,9 @@ fmi2Status Instance::doStep(double t, double H) {
     return fmi2Discard;
   }
   lastSuccessfulTime_ = simulation_->time();
+  if (result.errorRejections > 0 && logs(fmi2OK, "logStep"))
+    log(fmi2OK, "logStep", numberText(double(result.errorRejections)) +
+                               " substeps rejected for their error estimate; the last at " + result.lastRejection);
   if (logs(fmi2OK, "logStep"))
     log(fmi2OK, "logStep", "t = " + numberText(simulation_->time()) + ": " + solverStatistics());
   return fmi2OK;

@@ -80,7 +80,7 @@ class Instance {
   bool buildSimulation(const char* function);
   // A Simulation of the scene with the fixed parameters of `values` (by
   // table index), not yet initialized. Throws SceneError.
-  std::unique_ptr<Simulation> makeSimulation(const std::vector<double>& values) const;
+  std::unique_ptr<Simulation> makeSimulation(const std::vector<double>& values, double tolerance) const;
   // State bytes of the present instance, and their restore (all or nothing).
   std::vector<unsigned char> saveState();
   fmi2Status loadState(const char* function, const std::vector<unsigned char>& bytes);
@@ -122,6 +122,7 @@ class Instance {
   double startTime_ = 0.0;
   bool stopTimeDefined_ = false;
   double stopTime_ = 0.0;
+  double tolerance_ = 0.0;  // fmi2SetupExperiment's relative tolerance; 0: not defined
   double lastSuccessfulTime_ = 0.0;
   bool terminatedBySlave_ = false;
 };

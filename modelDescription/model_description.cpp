@@ -211,6 +211,7 @@ std::string modelDescriptionXml(const Scene& scene, const std::vector<Variable>&
   Node experiment = x.append_child("DefaultExperiment");
   experiment.append_attribute("startTime") = number(scene.experiment.startTime).c_str();
   experiment.append_attribute("stopTime") = number(scene.experiment.stopTime).c_str();
+  experiment.append_attribute("tolerance") = number(scene.experiment.tolerance).c_str();
   experiment.append_attribute("stepSize") = number(scene.experiment.outputInterval).c_str();
   // (FMI 2.0 places VendorAnnotations between DefaultExperiment and ModelVariables.)
   if (caps.canInterpolateInputs) {

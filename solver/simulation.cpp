@@ -45,10 +45,38 @@ double sceneParameter(const Scene& scene, const Quantity& q) {
   }
 }
 
+namespace {
+// The scene's length scale for the error tolerance (README, "Error
+// control"): the extent of its design configuration (body origins, the
+// nodes of flexible bodies and the world origin) or, if larger, a body's
+// radius of gyration; at least 1 mm.
+double lengthScale(const Scene& scene) {
+  Vec3 low = Vec3::Zero(), high = Vec3::Zero();
+  double gyration = 0.0;
+  auto include = [&](const Vec3& p) {
+    low = low.cwiseMin(p);
+    high = high.cwiseMax(p);
+  };
+  for (const BodySpec& b : scene.bodies) {
+    include(b.position);
+    if (b.mass > 0.0) gyration = std::max(gyration, std::sqrt(b.inertia.trace() / b.mass));
+  }
+  for (const FlexibleBodySpec& f : scene.flexibleBodies)
+    for (const Vec3& p : f.nodes) include(p);
+  return std::max({1e-3, (high - low).norm(), gyration});
+}
+
+SolverOptions solverOptions(const Scene& scene) {
+  SolverOptions options = scene.solver;
+  options.errorScale = lengthScale(scene);
+  return options;
+}
+}  // namespace
+
 Simulation::Simulation(const Scene& scene)
     : scene_(scene), system_(assemble(scene)) {
-  if (scene.analysis == Analysis::Static) stepper_ = std::make_unique<StaticEquilibrium>(scene.solver);
-  else stepper_ = std::make_unique<GeneralizedAlpha>(scene.solver);
+  if (scene.analysis == Analysis::Static) stepper_ = std::make_unique<StaticEquilibrium>(solverOptions(scene));
+  else stepper_ = std::make_unique<GeneralizedAlpha>(solverOptions(scene));
   const Model& model = system_.model();
   for (const BodySpec& b : scene.bodies) bodyIndex_.push_back(findBody(model, b.name));
   for (const JointSpec& j : scene.joints) jointIndex_.push_back(findJoint(model, j.name));

@@ -2,7 +2,8 @@
 
 #include <cmath>
 #include <limits>
-#include <sstream>
+
+#include "scene/number_text.hpp"
 
 namespace mfbd {
 
@@ -25,26 +26,20 @@ bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std:
   state.lambda = VectorXd::Zero(m);
   VectorXd r, phi;
   system.residual(state.t, state.q, state.v, state.vdot, state.lambda, r, phi);
-  LinearSolver mass;
-  const SparseMatrix S = iterationMatrix(system, state, 1.0, 0.0, 0.0);
-  VectorXd rhs = VectorXd::Zero(S.rows());
+  VectorXd rhs = VectorXd::Zero(newtonSize(system, 1.0));
   rhs.head(n) = -r;
   if (m > 0) rhs.segment(n, m) = -system.constraintAccelerationTerm(state.t, state.q, state.v);
-  mass.analyzePattern(S, pivotOrder(system, 1.0));
-  if (mass.factorize(S) != LinearSolver::Status::Ok) {
+  // Iterative refinement against the unregularised matrix removes the
+  // regularisation's error from the multipliers (they are reaction outputs).
+  VectorXd x;
+  if (!solveOnce(system, state, 1.0, 0.0, 0.0, rhs, m > 0 ? 3 : 0, x)) {
     message = "the mass matrix is singular at the initial configuration";
     return false;
-  }
-  VectorXd x = mass.solve(rhs);
-  if (m > 0) {
-    // Iterative refinement against the unregularised matrix removes the
-    // regularisation's error from the multipliers (they are reaction outputs).
-    const SparseMatrix exact = unregularized(system, S);
-    for (int sweep = 0; sweep < 3; ++sweep) x += mass.solve(rhs - exact * x);
   }
   state.vdot = x.head(n);
   state.lambda = x.segment(n, m);
   state.a = state.vdot;
+  state.hBefore = 0.0;
   if (!allFinite(state.vdot) || !allFinite(state.lambda)) {
     message = "initial accelerations are not finite";
     return false;
@@ -70,19 +65,18 @@ bool GeneralizedAlpha::restartAfterInputJump(Dynamics& system, IntegratorState& 
     message = "residual is not finite after the input change";
     return false;
   }
-  const SparseMatrix S = newtonMatrix(system, s, s.h > 0.0 ? s.h : options_.hMax);
-  LinearSolver solver;
-  solver.analyzePattern(S, pivotOrder(system, 1.0));
-  if (solver.factorize(S) != LinearSolver::Status::Ok) {
+  const MatrixFactors c = matrixFactors(s.h > 0.0 ? s.h : options_.hMax);
+  VectorXd rhs = VectorXd::Zero(newtonSize(system, c.cM));
+  rhs.head(n) = -r;
+  VectorXd jump;
+  if (!solveOnce(system, s, c.cM, c.cC, c.cK, rhs, 0, jump)) {
     message = "singular iteration matrix after the input change";
     return false;
   }
-  VectorXd rhs = VectorXd::Zero(S.rows());
-  rhs.head(n) = -r;
-  const VectorXd jump = solver.solve(rhs);
   s.vdot += jump.head(n);
   s.a += jump.head(n);
   s.lambda += jump.segment(n, m);
+  s.hBefore = 0.0;  // the accelerations jumped: nothing to extrapolate from
   return true;
 }
 
@@ -102,13 +96,30 @@ bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial,
   if (assembleIterationMatrix(system, trial, c.cM, c.cC, c.cK))
     solver_.analyzePattern(assembledIterationMatrix(), pivotOrder(system, c.cM));
   if (solver_.factorize(assembledIterationMatrix()) != LinearSolver::Status::Ok) return false;
-  factoredStep_ = h;
-  factoredAt_ = trial.q;
-  substepsSinceFactorization_ = 0.0;
-  elasticCoordinates_ = system.elasticCoordinates();
-  correctionNoise_ = constraintNoise(system, system.velocityCount(), system.constraintCount(),
-                                     assembledIterationMatrix().rows());
+  NewtonMemory& memory = refresh_.memory;
+  memory.origin.t = trial.t;
+  memory.origin.q = trial.q;
+  memory.origin.v = trial.v;
+  memory.origin.vdot = trial.vdot;
+  memory.origin.lambda = trial.lambda;
+  memory.elasticCoordinates = system.elasticCoordinates();
+  memory.correctionNoise = constraintNoise(system, system.velocityCount(), system.constraintCount(),
+                                           assembledIterationMatrix().rows());
   return true;
+}
+
+bool GeneralizedAlpha::restoreNewtonMemory(Dynamics& system, const NewtonMemory& memory) {
+  refresh_.memory = memory;
+  if (memory.factoredStep <= 0.0) return true;
+  IntegratorState at;
+  at.t = memory.origin.t;
+  at.q = memory.origin.q;
+  at.v = memory.origin.v;
+  at.vdot = memory.origin.vdot;
+  at.lambda = memory.origin.lambda;
+  if (factorize(system, at, memory.factoredStep)) return true;
+  refresh_.failed();
+  return false;
 }
 
 // The correction that the round-off of the constraint rows alone produces
@@ -139,205 +150,182 @@ double GeneralizedAlpha::constraintNoise(const Dynamics& system, int n, int m, i
 // gamma'], through the factorised Newton matrix (S ~ M for the step: the
 // least change in the mass metric, to O(h)).
 void GeneralizedAlpha::projectVelocities(Dynamics& system, IntegratorState& trial, double gammaPrime) {
+  // Two sweeps: the matrix is kept over many substeps, and its constraint
+  // rows (those of its origin) remove most of the violation, the second
+  // sweep the rest.
   const int n = system.velocityCount(), m = system.constraintCount();
-  const VectorXd violation = system.velocityConstraints(trial.t, trial.q, trial.v);
-  if (violation.size() != m) return;
-  rhs_.setZero(assembledIterationMatrix().rows());
-  rhs_.segment(n, m) = -violation / gammaPrime;
-  system.turnWithRotations(factoredAt_, trial.q, rhs_, true);
-  solver_.solve(rhs_, delta_);
-  system.turnWithRotations(factoredAt_, trial.q, delta_, false);
-  if (delta_.allFinite()) trial.v += gammaPrime * delta_.head(n);
+  for (int sweep = 0; sweep < 2; ++sweep) {
+    const VectorXd violation = system.velocityConstraints(trial.t, trial.q, trial.v);
+    if (violation.size() != m) return;
+    rhs_.setZero(assembledIterationMatrix().rows());
+    rhs_.segment(n, m) = -violation / gammaPrime;
+    system.turnWithRotations(refresh_.memory.origin.q, trial.q, rhs_, true);
+    solver_.solve(rhs_, delta_);
+    system.turnWithRotations(refresh_.memory.origin.q, trial.q, delta_, false);
+    if (!delta_.allFinite()) return;
+    trial.v += gammaPrime * delta_.head(n);
+  }
 }
 
-bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
-  const int n = system.velocityCount(), m = system.constraintCount();
-  const double betaPrime = (1.0 - alphaM_) / (beta_ * h * h * (1.0 - alphaF_));
-  const double gammaPrime = gamma_ / (beta_ * h);
-  const double aPerVdot = (1.0 - alphaF_) / (1.0 - alphaM_);
-
-  if (freshStarts_ > 0) {
-    --freshStarts_;
-    factoredStep_ = 0.0;
+// The Newton problem of one substep: corrections dq of the increment h
+// Delta q, with v, vdot, a and the multipliers following through gamma',
+// beta' (Arnold & Bruls 2007). Its vectors are GeneralizedAlpha's members:
+// assigned, not allocated, every substep.
+class SubstepNewton : public NewtonSystem {
+ public:
+  SubstepNewton(GeneralizedAlpha& ga, Dynamics& system, const IntegratorState& start, IntegratorState& trial,
+                double h)
+      : ga_(ga), system_(system), start_(start), trial_(trial), n_(system.velocityCount()),
+        m_(system.constraintCount()) {
+    betaPrime_ = (1.0 - ga.alphaM_) / (ga.beta_ * h * h * (1.0 - ga.alphaF_));
+    gammaPrime_ = ga.gamma_ / (ga.beta_ * h);
   }
-  // Predictor: vdot_{n+1} = vdot_n, with the world-frame accelerations of
-  // spinning bodies' points turned as far as the bodies turn in h (the
-  // centripetal acceleration turns with the body: F4's first Newton
-  // correction 1.4e-4 -> 7e-6 m at n = 2, h = 8e-3). The trial state and
-  // the vectors of the iteration are members: assigned, not allocated,
-  // every substep.
-  IntegratorState& trial = trial_;
-  trial = s;
-  trial.t = s.t + h;
-  system.turnOverStep(s.q, s.v, h, trial.vdot);
-  trial.a = ((1.0 - alphaF_) * trial.vdot + alphaF_ * s.vdot - alphaM_ * s.a) / (1.0 - alphaM_);
-  trial.v = s.v + h * (1.0 - gamma_) * s.a + h * gamma_ * trial.a;
-  VectorXd& hDeltaQ = hDeltaQ_;
-  hDeltaQ = h * s.v + h * h * (0.5 - beta_) * s.a + h * h * beta_ * trial.a;
-  system.retract(trial.q, hDeltaQ);
+  double gammaPrime() const { return gammaPrime_; }
+  double betaPrime() const { return betaPrime_; }
 
-  VectorXd &r = r_, &phi = phi_, &rhs = rhs_, &delta = delta_;
-  double previous = 0.0;
-  // Corrections computed with the current factorization, if it was made in
-  // this substep (-1: an earlier substep's matrix).
-  int withFreshMatrix = -1;
-  // The round-off floor of the corrections: a few ulps of the coordinates
-  // where stiff forces read them (Dynamics::elasticCoordinates), the noise
-  // the constraints' round-off makes (constraintNoise), and a few ulps of
-  // the substep's own increment, to which the corrections add (a rigid
-  // tree resolves far below its coordinates' ulps).
-  const double epsilon = std::numeric_limits<double>::epsilon();
-  const double coordinateUlps =
-      256.0 * epsilon * std::max(1.0, s.q.scalars.size() ? s.q.scalars.cwiseAbs().maxCoeff() : 0.0);
-  const double coordinateFloor = elasticCoordinates_ ? coordinateUlps : 0.0;
-  // The tolerance holds for the error left in q (m, rad), v (per s) and
-  // vdot (per s^2); see the convergence test below.
-  const double target = options_.tolerance * std::min({1.0, 1.0 / gammaPrime, 1.0 / betaPrime});
-  for (int k = 0; k < options_.maxIterations; ++k) {
-    system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, r, phi);
-    if (!allFinite(r) || !allFinite(phi)) {
+  bool evaluate(NewtonIterate& it, std::string& why) override {
+    system_.residual(trial_.t, trial_.q, trial_.v, trial_.vdot, trial_.lambda, ga_.r_, ga_.phi_);
+    if (!allFinite(ga_.r_) || !allFinite(ga_.phi_)) {
       why = "residual is not finite";
       return false;
     }
-    // The last substep of a communication step, tEnd - t, equals h only up
-    // to round-off: it keeps the matrix of h rather than refactorising.
-    const bool fresh = !(std::abs(factoredStep_ - h) <= 1e-9 * h);
-    if (fresh) {
-      if (!factorize(system, trial, h)) {
-        why = "singular iteration matrix";
-        return false;
-      }
-      ++s.factorizations;
-      withFreshMatrix = 0;
-    }
-    // The constraints are met to the tolerance or to their round-off.
-    const double phiFloor = 64.0 * std::numeric_limits<double>::epsilon() * system.constraintLengthScale();
-    rhs.setZero(assembledIterationMatrix().rows());
-    rhs.head(n) = -r / betaPrime;
-    rhs.segment(n, m) = -phi;
-    // The matrix factorised at factoredAt_, turned with the rotations since
-    // (Dynamics::turnWithRotations): a spinning beam's matrix stays good
-    // for as long as its deformation and speed change little.
-    system.turnWithRotations(factoredAt_, trial.q, rhs, true);
-    solver_.solve(rhs, delta);
-    system.turnWithRotations(factoredAt_, trial.q, delta, false);
-    ++s.newtonIterations;
-    if (withFreshMatrix >= 0) ++withFreshMatrix;
-    // The update of q, v, vdot and a in one pass over the correction, with
-    // its largest entry and a NaN check (0 d sums to 0 unless some d is not
-    // finite): pendulum -2.5 %, double pendulum -4 % per substep.
-    double size = 0.0, notFinite = 0.0;
-    {
-      const double* d = delta.data();
-      double *dq = hDeltaQ.data(), *v = trial.v.data(), *vdot = trial.vdot.data(), *a = trial.a.data();
-      const double aPerCorrection = aPerVdot * betaPrime;
-      for (int i = 0; i < n; ++i) {
-        const double di = d[i];
-        dq[i] += di;
-        v[i] += gammaPrime * di;
-        vdot[i] += betaPrime * di;
-        a[i] += aPerCorrection * di;
-        size = std::max(size, std::abs(di));
-        notFinite += 0.0 * di;
-      }
-    }
-    if (notFinite != 0.0) {
-      why = "Newton correction is not finite";
+    it.violation = m_ > 0 ? ga_.phi_.cwiseAbs().maxCoeff() : 0.0;
+    it.violationFloor = 64.0 * std::numeric_limits<double>::epsilon() * system_.constraintLengthScale();
+    return true;
+  }
+
+  bool factorize(double h, std::string& why) override {
+    if (!ga_.factorize(system_, trial_, h)) {
+      why = "singular iteration matrix";
       return false;
     }
-    trial.q = s.q;
-    system.retract(trial.q, hDeltaQ);
-    if (m > 0) trial.lambda += betaPrime * delta.segment(n, m);
-    // Converged when the error left after this correction is small at
-    // every level. With contraction rate rho it is about rho / (1 - rho)
-    // times the correction (Hairer & Wanner IV.8), so never at the first.
-    // A position error e left in q is an error gamma' e in v and beta' e
-    // (~ e / (beta h^2)) in vdot, which acts on the next substeps as a force
-    // error: the tolerance holds for q (m, rad), v (per s) and vdot (per
-    // s^2), so the Newton error shrinks with h faster than the
-    // discretisation error and the method keeps its order (a bound on q
-    // alone left four_bar's energy error growing as h shrank: 1.5e-7 J at
-    // h = 1e-4, 9e-6 J at 1e-5 over 1 s). Once two corrections in a row
-    // are round-off noise (below the floor) their sizes say nothing more:
-    // converged too (the error under the noise has contracted twice).
-    const double rho = k > 0 ? size / previous : 1.0;
-    if (k == 1 && withFreshMatrix < 0) firstRate_ = rho;
-    const double floor =
-        std::max({coordinateFloor, 4.0 * correctionNoise_, 16.0 * epsilon * hDeltaQ.cwiseAbs().maxCoeff()});
-    // Where stiff forces read the coordinates, their round-off already
-    // makes force noise of the tolerance's order: one correction below the
-    // floor, or an error left below the tolerance in q, is converged there.
-    const bool belowFloor = size <= floor && (elasticCoordinates_ || (k > 0 && previous <= floor));
-    // Before a second correction, the rate this matrix showed in the
-    // previous substep stands in for it (a loose tolerance then stops at
-    // the first correction every other substep; the rate is never older
-    // than one substep, as a kept matrix ages). Elastic systems keep the
-    // old rule, never at the first correction.
-    const double rate = k > 0 ? rho : withFreshMatrix < 0 && !elasticCoordinates_ ? lastRate_ : 1.0;
-    const double remaining = rate < 1.0 ? rate / (1.0 - rate) * size : HUGE_VAL;
-    const double resolved = elasticCoordinates_ ? std::max(target, options_.tolerance) : target;
-    // A fresh matrix's corrections that stop contracting below a looser
-    // floor (the coordinates' ulps, 16 times the constraint noise) are
-    // noise too: the noise estimate is only an estimate (Bricard's
-    // corrections hover at 2-4e-16 against an estimated 2e-16).
-    const bool noise = k > 0 && withFreshMatrix >= 1 && rho > 0.5 &&
-                       size <= std::max(coordinateUlps, 16.0 * correctionNoise_);
-    const bool small = remaining <= resolved || size <= 0.01 * target || belowFloor || noise;
-    if (small && (m == 0 || phi.cwiseAbs().maxCoeff() <= std::max(options_.tolerance, phiFloor))) {
-      lastRate_ = k > 0 ? rho : 1.0;
-      lastIterations_ = k + 1;
-      substepsSinceFactorization_ += 1.0;
-      trial.substeps = s.substeps + 1;
-      trial.newtonIterations = s.newtonIterations;
-      trial.factorizations = s.factorizations;
-      trial.rejectedSubsteps = s.rejectedSubsteps;
-      if (alphaM_ == alphaF_ && m > 0) projectVelocities(system, trial, gammaPrime);
-      std::swap(s, trial);  // trial keeps s's buffers for the next substep
-      return true;
-    }
-    // Modified Newton: a stale iteration matrix is refreshed when the
-    // contraction slows, or when at its rate the error left would not be
-    // resolved in the few iterations left (a rate of 0.2 from 1e-3 to
-    // 1e-14 needs 16: a long communication step's matrix, kept over ten
-    // substeps of a double pendulum, failed whole substeps that way; and
-    // a rate of 0.05 that leaves 1e-16 m per substep of a double pendulum
-    // at h = 1e-5 is a steady 3e-6 m/s^2 error in its accelerations:
-    // four corrections at most, where the tolerance holds for vdot); a
-    // fresh one that does not contract has failed. Corrections near the
-    // round-off floor stay with the current matrix: there a refresh
-    // (tangent and factorization, several iterations' worth) would save an
-    // iteration at most, and their rate is half noise. Where stiff forces
-    // read the coordinates the rate is judged only in the last few
-    // iterations: earlier, a refresh for a merely slow rate costs more
-    // than the iterations it saves wherever the tangent is expensive
-    // (flexible four-bar: +35 % per substep).
-    const int left = elasticCoordinates_ ? options_.maxIterations - 1 - k : 4;
-    const bool tooSlow = left <= 4 && rho < 1.0 && std::pow(rho, left) * remaining > resolved;
-    if (k > 0 && (size > 0.25 * previous || tooSlow) && size > (elasticCoordinates_ ? 10.0 : 1.0) * floor) {
-      // Diverging: two corrections of this substep's own matrix, growing
-      // (a correction right after a refresh is not compared with the stale
-      // matrix's last one).
-      if (withFreshMatrix >= 2 && size > previous) {
-        std::ostringstream msg;
-        msg << "Newton diverging (correction " << size << " after " << previous << ")";
-        why = msg.str();
-        factoredStep_ = 0.0;
-        return false;
-      }
-      factoredStep_ = 0.0;  // refactorise at the next iteration
-      // A matrix from an earlier substep that did not contract at all
-      // (rate near 1 at the first check): the next few substeps start
-      // with a fresh one rather than spend two corrections finding out
-      // again (see freshStarts_).
-      if (withFreshMatrix < 0 && k == 1 && size > 0.5 * previous) freshStarts_ = kFreshStarts;
-    }
-    previous = size;
+    ++trial_.factorizations;
+    return true;
   }
-  std::ostringstream msg;
-  msg << "Newton did not converge in " << options_.maxIterations << " iterations";
-  why = msg.str();
-  factoredStep_ = 0.0;
-  return false;
+
+  // The matrix factorised at the origin, turned with the rotations since
+  // (Dynamics::turnWithRotations): a spinning beam's matrix stays good for
+  // as long as its deformation and speed change little. The update of q, v,
+  // vdot and a in one pass over the correction, with its largest entry and
+  // a NaN check (0 d sums to 0 unless some d is not finite).
+  double correct() override {
+    VectorXd &rhs = ga_.rhs_, &delta = ga_.delta_;
+    const Configuration& origin = ga_.refresh_.memory.origin.q;
+    rhs.setZero(ga_.assembledIterationMatrix().rows());
+    rhs.head(n_) = -ga_.r_ / betaPrime_;
+    rhs.segment(n_, m_) = -ga_.phi_;
+    system_.turnWithRotations(origin, trial_.q, rhs, true);
+    ga_.solver_.solve(rhs, delta);
+    system_.turnWithRotations(origin, trial_.q, delta, false);
+    ++trial_.newtonIterations;
+    double size = 0.0, notFinite = 0.0;
+    const double* d = delta.data();
+    double *dq = ga_.hDeltaQ_.data(), *v = trial_.v.data(), *vdot = trial_.vdot.data(), *a = trial_.a.data();
+    const double aPerCorrection = (1.0 - ga_.alphaF_) / (1.0 - ga_.alphaM_) * betaPrime_;
+    for (int i = 0; i < n_; ++i) {
+      const double di = d[i];
+      dq[i] += di;
+      v[i] += gammaPrime_ * di;
+      vdot[i] += betaPrime_ * di;
+      a[i] += aPerCorrection * di;
+      size = std::max(size, std::abs(di));
+      notFinite += 0.0 * di;
+    }
+    if (notFinite != 0.0) return std::numeric_limits<double>::quiet_NaN();
+    trial_.q = start_.q;
+    system_.retract(trial_.q, ga_.hDeltaQ_);
+    if (m_ > 0) trial_.lambda += betaPrime_ * delta.segment(n_, m_);
+    return size;
+  }
+
+ private:
+  GeneralizedAlpha& ga_;
+  Dynamics& system_;
+  const IntegratorState& start_;
+  IntegratorState& trial_;
+  int n_, m_;
+  double betaPrime_, gammaPrime_;
+};
+
+// Local error estimate of the substep, in the position coordinates (m,
+// rad) of the chart at its start (Geradin & Cardona 2001, ch. 7, for the
+// Newmark family): the substep's increment h v_n + h^2 ((1/2 - beta) a_n +
+// beta a_{n+1}) against a Taylor increment one order higher, h v_n + h^2
+// (vdot_n / 3 + vdot_{n+1} / 6) (the third derivative taken as the
+// difference of the accelerations at the ends over h), so
+//   e = h^2 [(1/2 - beta) a_n + beta a_{n+1} - vdot_n / 3 - vdot_{n+1} / 6],
+// O(h^3) on smooth motion. Stiff modes that the step does not resolve show
+// in it as large differences of the accelerations at the two ends.
+double GeneralizedAlpha::localError(const IntegratorState& s, const IntegratorState& trial, double h) const {
+  double largest = 0.0;
+  for (int i = 0; i < s.vdot.size(); ++i) {
+    const double e = (0.5 - beta_) * s.a[i] + beta_ * trial.a[i] - s.vdot[i] / 3.0 - trial.vdot[i] / 6.0;
+    largest = std::max(largest, std::abs(e));
+  }
+  return h * h * largest;
+}
+
+// Predictor of vdot and lambda at the substep's end. Rigid systems: linear
+// extrapolation from the last two substeps' starts, vdot_n + h/h_{n-1}
+// (vdot_n - vdot_{n-1}), which leaves an O(h^2) first correction of vdot
+// where vdot_{n+1} = vdot_n leaves O(h) (Newton then starts closer, and
+// the matrix kept across substeps contracts the rest in fewer
+// corrections). Where stiff forces read the coordinates the accelerations
+// ring at frequencies the step does not resolve, and the extrapolation
+// would amplify the ringing: vdot_n, with the world-frame accelerations of
+// spinning bodies' points turned as far as the bodies turn in h (the
+// centripetal acceleration turns with the body: F4's first Newton
+// correction 1.4e-4 -> 7e-6 m at n = 2, h = 8e-3).
+void GeneralizedAlpha::predict(Dynamics& system, const IntegratorState& s, double h, IntegratorState& trial) {
+  const bool history = s.hBefore > 0.0 && s.vdotBefore.size() == s.vdot.size() &&
+                       s.lambdaBefore.size() == s.lambda.size();
+  if (history && !system.elasticCoordinates()) {
+    const double ratio = h / s.hBefore;
+    trial.vdot = s.vdot + ratio * (s.vdot - s.vdotBefore);
+    trial.lambda = s.lambda + ratio * (s.lambda - s.lambdaBefore);
+  } else {
+    system.turnOverStep(s.q, s.v, h, trial.vdot);
+  }
+  trial.a = ((1.0 - alphaF_) * trial.vdot + alphaF_ * s.vdot - alphaM_ * s.a) / (1.0 - alphaM_);
+  trial.v = s.v + h * (1.0 - gamma_) * s.a + h * gamma_ * trial.a;
+  hDeltaQ_ = h * s.v + h * h * (0.5 - beta_) * s.a + h * h * beta_ * trial.a;
+  system.retract(trial.q, hDeltaQ_);
+}
+
+bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
+  IntegratorState& trial = trial_;
+  trial = s;
+  trial.t = s.t + h;
+  predict(system, s, h, trial);
+
+  SubstepNewton problem(*this, system, s, trial, h);
+  // The tolerance holds for the error left in q (m, rad), v (per s) and
+  // vdot (per s^2): see ErrorLeftTest.
+  const double target =
+      options_.tolerance * std::min({1.0, 1.0 / problem.gammaPrime(), 1.0 / problem.betaPrime()});
+  const double coordinateScale = s.q.scalars.size() ? s.q.scalars.cwiseAbs().maxCoeff() : 0.0;
+  const ErrorLeftTest test(options_.tolerance, target, coordinateScale, refresh_.memory, hDeltaQ_);
+  const bool converged = solveNewton(problem, test, refresh_, h, options_.maxIterations, "converge", why);
+  // The counters of the tries count, accepted or not.
+  s.newtonIterations = trial.newtonIterations;
+  s.factorizations = trial.factorizations;
+  if (!converged) return false;
+  if (errorControlled()) {
+    errorRatio_ = localError(s, trial, h) / (options_.errorTolerance * options_.errorScale);
+    if (!(errorRatio_ <= 1.0)) {
+      errorRejected_ = true;
+      why = "local error estimate " + numberText(errorRatio_) + " times the tolerance";
+      return false;
+    }
+  }
+  trial.substeps = s.substeps + 1;
+  trial.vdotBefore = s.vdot;
+  trial.lambdaBefore = s.lambda;
+  trial.hBefore = h;
+  trial.rejectedSubsteps = s.rejectedSubsteps;
+  if (alphaM_ == alphaF_ && system.constraintCount() > 0) projectVelocities(system, trial, problem.gammaPrime());
+  std::swap(s, trial);  // trial keeps s's buffers for the next substep
+  return true;
 }
 
 }  // namespace mfbd

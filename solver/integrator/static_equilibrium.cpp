@@ -1,6 +1,9 @@
 #include "integrator/static_equilibrium.hpp"
 
-#include <sstream>
+#include <functional>
+#include <limits>
+
+#include "integrator/newton.hpp"
 
 namespace mfbd {
 
@@ -40,41 +43,75 @@ bool StaticEquilibrium::substep(Dynamics& system, IntegratorState& s, double h, 
   return true;
 }
 
-// Full Newton: the tangent stiffness is refactorised at every iteration.
-bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, VectorXd& increment, std::string& why) {
-  const int n = system.velocityCount(), m = system.constraintCount();
-  VectorXd r, phi, rhs;
-  for (int k = 0; k < options_.maxIterations; ++k) {
-    system.residual(s.t, s.q, s.v, s.vdot, s.lambda, r, phi);
-    if (!r.allFinite() || !phi.allFinite()) {
+namespace {
+// Equilibrium r(q) = 0, Phi(q) = 0 by Newton on the tangent stiffness, with
+// the corrections accumulated in `increment`.
+class EquilibriumNewton : public NewtonSystem {
+ public:
+  EquilibriumNewton(Dynamics& system, IntegratorState& s, VectorXd& increment, LinearSolver& solver,
+                    const std::function<const SparseMatrix&(bool&)>& assemble)
+      : system_(system), s_(s), increment_(increment), solver_(solver), assemble_(assemble),
+        n_(system.velocityCount()), m_(system.constraintCount()) {}
+
+  bool evaluate(NewtonIterate& it, std::string& why) override {
+    system_.residual(s_.t, s_.q, s_.v, s_.vdot, s_.lambda, r_, phi_);
+    if (!r_.allFinite() || !phi_.allFinite()) {
       why = "residual is not finite";
       return false;
     }
-    if (assembleIterationMatrix(system, s, 0.0, 0.0, 1.0)) solver_.analyzePattern(assembledIterationMatrix());
-    ++s.factorizations;
-    if (solver_.factorize(assembledIterationMatrix()) != LinearSolver::Status::Ok) {
+    it.violation = m_ > 0 ? phi_.cwiseAbs().maxCoeff() : 0.0;
+    return true;
+  }
+
+  bool factorize(double, std::string& why) override {
+    bool newPattern = false;
+    const SparseMatrix& K = assemble_(newPattern);
+    if (newPattern) solver_.analyzePattern(K);
+    ++s_.factorizations;
+    if (solver_.factorize(K) != LinearSolver::Status::Ok) {
       why = "singular tangent stiffness (an unsupported rigid-body mode, or a limit point)";
       return false;
     }
-    rhs.setZero(assembledIterationMatrix().rows());
-    rhs.head(n) = -r;
-    rhs.segment(n, m) = -phi;
-    const VectorXd delta = solver_.solve(rhs);
-    ++s.newtonIterations;
-    const double size = delta.head(n).cwiseAbs().maxCoeff();
-    if (!std::isfinite(size)) {
-      why = "Newton correction is not finite";
-      return false;
-    }
-    system.retract(s.q, delta.head(n));
-    increment += delta.head(n);
-    s.lambda += delta.segment(n, m);
-    if (size <= options_.tolerance && (m == 0 || phi.cwiseAbs().maxCoeff() <= options_.tolerance)) return true;
+    rows_ = K.rows();
+    return true;
   }
-  std::ostringstream msg;
-  msg << "Newton did not reach equilibrium in " << options_.maxIterations << " iterations";
-  why = msg.str();
-  return false;
+
+  double correct() override {
+    VectorXd rhs = VectorXd::Zero(rows_);
+    rhs.head(n_) = -r_;
+    rhs.segment(n_, m_) = -phi_;
+    const VectorXd delta = solver_.solve(rhs);
+    ++s_.newtonIterations;
+    if (!delta.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+    const double size = delta.head(n_).cwiseAbs().maxCoeff();
+    system_.retract(s_.q, delta.head(n_));
+    increment_ += delta.head(n_);
+    s_.lambda += delta.segment(n_, m_);
+    return size;
+  }
+
+ private:
+  Dynamics& system_;
+  IntegratorState& s_;
+  VectorXd& increment_;
+  LinearSolver& solver_;
+  const std::function<const SparseMatrix&(bool&)>& assemble_;
+  int n_, m_;
+  Eigen::Index rows_ = 0;
+  VectorXd r_, phi_;
+};
+}  // namespace
+
+// Full Newton: the tangent stiffness is refactorised at every iteration.
+bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, VectorXd& increment, std::string& why) {
+  const std::function<const SparseMatrix&(bool&)> assemble = [&](bool& newPattern) -> const SparseMatrix& {
+    newPattern = assembleIterationMatrix(system, s, 0.0, 0.0, 1.0);
+    return assembledIterationMatrix();
+  };
+  EquilibriumNewton problem(system, s, increment, solver_, assemble);
+  MatrixRefreshPolicy fullNewton(MatrixRefreshPolicy::Kind::Full);
+  return solveNewton(problem, CorrectionSizeTest(options_.tolerance), fullNewton, 0.0, options_.maxIterations,
+                     "reach equilibrium", why);
 }
 
 }  // namespace mfbd

@@ -1,6 +1,7 @@
 // What advances a Dynamics in time: generalized-alpha for dynamics, or load
 // stepping to static equilibrium. Both share the substep loop: substeps of at
-// most h_max, halved on failure down to h_min, grown back after successes.
+// most h_max, halved on failure down to h_min, grown back after successes;
+// under error control sized by the local error estimate.
 #pragma once
 #include <string>
 
@@ -17,6 +18,11 @@ struct IntegratorState {
   // Statics: dq/dt of the last load step (the secant predictor of the
   // next); empty when there is none (start, a failed step, inputs changed).
   VectorXd pathRate;
+  // Dynamics: vdot and lambda at the start of the last accepted substep and
+  // its size (0: none since the start or the last input jump), from which
+  // the predictor extrapolates.
+  VectorXd vdotBefore, lambdaBefore;
+  double hBefore = 0.0;
   double h = 0.0;               // substep size to try next
   // Counters since the start of the run.
   long substeps = 0;
@@ -27,6 +33,7 @@ struct IntegratorState {
   template <class Archive>
   void visitState(Archive& ar) {
     ar(t, q, v, vdot, a, lambda, pathRate, h, substeps, newtonIterations, factorizations, rejectedSubsteps);
+    ar(vdotBefore, lambdaBefore, hBefore);
   }
 };
 
@@ -34,6 +41,10 @@ struct AdvanceResult {
   bool ok = true;
   double reachedTime = 0.0;  // on failure: how far substeps got before giving up
   std::string message;
+  // Substeps rejected in this advance for their error estimate, and why the
+  // last one was (for the log).
+  long errorRejections = 0;
+  std::string lastRejection;
 };
 
 class TimeStepper {
@@ -71,6 +82,12 @@ class TimeStepper {
   // One substep of size h from s.t; false (with a reason) leaves s unchanged.
   virtual bool substep(Dynamics& system, IntegratorState& s, double h, std::string& why) = 0;
   virtual void beginAdvance(const Dynamics& /*system*/) {}
+  // Whether substeps are sized by their error estimate (substep then sets
+  // errorRatio_, the estimate over the tolerance, and rejects a substep
+  // above it with errorRejected_).
+  virtual bool errorControlled() const { return false; }
+  double errorRatio_ = 0.0;
+  bool errorRejected_ = false;
 
   // The Newton matrix [S Phi_q^T; Phi_q -eps I] from the system's tangent,
   // auxiliary unknowns last.
@@ -78,6 +95,11 @@ class TimeStepper {
   // The same without the regularisation (eps = 0): the multipliers'
   // diagonal holds nothing else, so it is set to zero (no second tangent).
   static SparseMatrix unregularized(const Dynamics& system, SparseMatrix S);
+  // Builds the Newton matrix at `at`, factorises it (a factorization of its
+  // own), solves for rhs and refines the solution `refinements` times
+  // against the unregularised matrix. False if the matrix is singular.
+  static bool solveOnce(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
+                        const VectorXd& rhs, int refinements, VectorXd& x);
   // The same (regularised) matrix into assembledIterationMatrix(), reusing
   // the pattern and the triplet storage of the previous call; true when the
   // pattern is new and needs a symbolic analysis.
@@ -92,6 +114,9 @@ class TimeStepper {
   SolverOptions options_;
 
  private:
+  // The next substep size after an accepted one of size `step` whose error
+  // estimate was `ratio` times the tolerance; h the size tried.
+  double nextStep(double h, double step, double ratio) const;
   static void iterationTriplets(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
                                 Triplets& all, Triplets& jacobian);
 

@@ -237,12 +237,16 @@ SolverOptions parseSolver(const Field& f) {
 }
 
 Experiment parseExperiment(const Field& f) {
-  f.expectObject({"start_time", "stop_time", "output_interval"}, {});
+  f.expectObject({"start_time", "stop_time", "output_interval", "tolerance"}, {});
   Experiment e;
   if (f.has("start_time")) e.startTime = f.at("start_time").number();
   if (f.has("stop_time")) e.stopTime = f.at("stop_time").number();
   if (e.stopTime <= e.startTime) f.at("stop_time").fail("expected stop_time > start_time");
   if (f.has("output_interval")) e.outputInterval = f.at("output_interval").positive();
+  if (f.has("tolerance")) {
+    e.tolerance = f.at("tolerance").positive();
+    if (e.tolerance >= 1.0) f.at("tolerance").fail("expected a relative tolerance below 1");
+  }
   return e;
 }
 

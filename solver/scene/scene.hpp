@@ -210,6 +210,13 @@ struct SolverOptions {
   // of a conservative system), so the default is near round-off.
   double tolerance = 1e-14;
   int maxIterations = 12;
+  // Error control (the FMI tolerance, fmi2SetupExperiment): each substep's
+  // local error, estimated in the position coordinates, at most
+  // errorTolerance * errorScale (m; rad against errorScale / 1 m); 0: no
+  // control, substeps of h_max. errorScale is the scene's length scale
+  // (Simulation sets it).
+  double errorTolerance = 0.0;
+  double errorScale = 1.0;
   // Dynamics starts from the static equilibrium under gravity and loads at
   // the start time (solved at fmi2ExitInitializationMode), at rest.
   bool initialEquilibrium = false;
@@ -245,6 +252,7 @@ struct Experiment {
   double startTime = 0.0;
   double stopTime = 1.0;
   double outputInterval = 0.01;
+  double tolerance = 1e-4;  // relative error tolerance (SolverOptions::errorTolerance)
 };
 
 struct Scene {

@@ -243,3 +243,56 @@ TEST(GeneralizedAlpha, StaleMatrixOfASpinningUpBeamIsRefreshed) {
   EXPECT_GT(s.factorizations, 5);
   EXPECT_LT(s.factorizations, 0.1 * s.substeps);
 }
+
+TEST(GeneralizedAlpha, RestoredStateAndNewtonMemoryReplayBitForBit) {
+  // What FMU state saves of the integrator: the IntegratorState (with the
+  // predictor's history and the substep size) and the NewtonMemory (the
+  // refresh policy and the origin of the kept matrix). A second integrator
+  // given both continues exactly as the first, kept matrix included.
+  Scene scene = doublePendulum(1e-3);
+  scene.solver.rhoInf = 0.8;
+  System first(assemble(scene)), second(assemble(scene));
+  GeneralizedAlpha a(scene.solver), b(scene.solver);
+  IntegratorState s;
+  s.q = first.model().initialConfiguration;
+  s.v = first.model().initialVelocity;
+  std::string message;
+  ASSERT_TRUE(a.initialize(first, s, message)) << message;
+  for (int k = 0; k < 30; ++k) ASSERT_TRUE(a.advance(first, s, 0.01).ok);
+  ASSERT_GT(a.newtonMemory().factoredStep, 0.0);  // a kept matrix to restore
+  IntegratorState saved = s;
+  ASSERT_TRUE(b.restoreNewtonMemory(second, a.newtonMemory()));
+  for (int k = 0; k < 30; ++k) {
+    ASSERT_TRUE(a.advance(first, s, 0.01).ok);
+    ASSERT_TRUE(b.advance(second, saved, 0.01).ok);
+  }
+  EXPECT_EQ(s.q.scalars, saved.q.scalars);
+  EXPECT_EQ(s.v, saved.v);
+  EXPECT_EQ(s.newtonIterations, saved.newtonIterations);
+  EXPECT_EQ(s.factorizations, saved.factorizations);
+}
+
+TEST(GeneralizedAlpha, ErrorControlRejectsAndShrinksTheSubstepOfAStiffOscillator) {
+  // omega = 1e3 rad/s at h_max = 1e-2 (omega h = 10): the fixed step damps
+  // the motion away; with a tolerance the substeps shrink until the local
+  // error estimate is met, and the motion x = cos(omega t) comes out to a
+  // small multiple of the tolerance.
+  auto run = [](double tolerance, IntegratorState& s) {
+    SolverOptions o;
+    o.hMax = 1e-2;
+    o.errorTolerance = tolerance;
+    Oscillator osc(1e3);
+    GeneralizedAlpha ga(o);
+    s.q.scalars = VectorXd::Ones(1);
+    s.v = VectorXd::Zero(1);
+    std::string msg;
+    EXPECT_TRUE(ga.initialize(osc, s, msg)) << msg;
+    for (int k = 0; k < 10; ++k) EXPECT_TRUE(ga.advance(osc, s, 0.01).ok);
+    return std::abs(s.q.scalars[0] - std::cos(1e3 * 0.1));
+  };
+  IntegratorState fixed, controlled;
+  EXPECT_GT(run(0.0, fixed), 0.5);
+  EXPECT_LT(run(1e-8, controlled), 1e-3);
+  EXPECT_GT(controlled.rejectedSubsteps, 0);
+  EXPECT_GT(controlled.substeps, 100 * fixed.substeps);
+}

@@ -84,9 +84,9 @@ class Slave:
         except FMICallException as e:
             return e.status
 
-    def start(self, start_values=None, start_time=0.0, stop_time=None):
+    def start(self, start_values=None, start_time=0.0, stop_time=None, tolerance=None):
         assert self.instantiate(), self.messages()
-        assert self.call("setupExperiment", None, start_time, stop_time) == OK, self.messages()
+        assert self.call("setupExperiment", tolerance, start_time, stop_time) == OK, self.messages()
         for name, value in (start_values or {}).items():
             assert self.set(name, value) == OK, self.messages()
         assert self.call("enterInitializationMode") == OK, self.messages()
