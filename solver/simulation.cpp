@@ -578,7 +578,8 @@ void Simulation::loadState(StateReader& ar) {
   const auto sized = [n](const VectorXd& x) { return x.size() == 0 || x.size() == n; };
   if (state_.q.scalars.size() != model.initialConfiguration.scalars.size() ||
       state_.q.rotations.size() != model.initialConfiguration.rotations.size() || state_.v.size() != n ||
-      !sized(state_.vdot) || !sized(state_.a) || !sized(state_.pathRate) ||
+      !sized(state_.vdot) || !sized(state_.a) || !sized(state_.pathRate) || !sized(state_.vdotBefore) ||
+      (state_.lambdaBefore.size() != 0 && state_.lambdaBefore.size() != system_.constraintCount()) ||
       (state_.lambda.size() != 0 && state_.lambda.size() != system_.constraintCount()) ||
       orientation_.size() != orientationTracked_.size() || !system_.stateFits())
     throw StateError("its sizes do not fit this scene's model");
