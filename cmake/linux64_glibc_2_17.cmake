@@ -11,7 +11,7 @@
 # sanitizer build (scripts/sanitize.sh), where a static libstdc++'s emergency
 # exception pool would be left behind by every dlclose of the FMU.
 option(MFBD_PORTABLE_LINUX64 "Link libstdc++ statically and bind glibc symbols to 2.17" ON)
-set(MFBD_GLIBC_2_17_WRAPPED memcpy exp log pow pthread_once fstat64 __libc_single_threaded getentropy arc4random
+set(MFBD_GLIBC_2_17_WRAPPED memcpy exp log pow hypot pthread_once fstat64 __libc_single_threaded getentropy arc4random
     pthread_key_create pthread_key_delete pthread_getspecific pthread_setspecific
     pthread_rwlock_rdlock pthread_rwlock_wrlock pthread_rwlock_unlock)
 
