@@ -12,6 +12,7 @@ flags="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recove
 # in it), no win64 build, and the system's shared libstdc++: a static one
 # in the FMU leaves its emergency exception pool (one 72,704-byte block per
 # load) behind when the FMU is unloaded, which LeakSanitizer reports.
+# C++ only is instrumented: KLU's C sources are third-party code.
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "${launcher[@]}" \
