@@ -47,7 +47,7 @@ def compile_benchmark(build: pathlib.Path, name: str) -> pathlib.Path:
         return binary
     # -flto: the library is built with link-time optimisation (CMakeLists.txt).
     command = ["g++", "-O3", "-flto=auto", "-DNDEBUG", "-std=c++17", "-I", str(ROOT / "solver"), "-isystem", "/usr/include/eigen3",
-               "-I", "/usr/include/suitesparse", str(source), str(library), "-lklu", "-o", str(binary)]
+               str(source), str(library), str(build / "libmfbd_klu.a"), "-o", str(binary)]
     print(" ".join(command))
     subprocess.run(command, check=True)
     return binary

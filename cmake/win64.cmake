@@ -2,7 +2,7 @@
 # CMakeLists.txt. Eigen and nlohmann/json are header-only: their host
 # headers are used through links in the build folder, never the host's
 # /usr/include as a whole (its C library headers are not Windows').
-# No KLU here: the linear solver uses Eigen's SparseLU (linear_solver.cpp).
+# KLU is built from source (cmake/klu.cmake), as on linux64.
 set(host_headers "${CMAKE_BINARY_DIR}/host_headers")
 file(MAKE_DIRECTORY ${host_headers})
 foreach(header eigen3/Eigen nlohmann)

@@ -21,6 +21,7 @@ elseif(MFBD_WIN64)
       -DFMI2_INCLUDE_DIR=${FMI2_INCLUDE_DIR}
       -DMFBD_FMU_BINARY_ROOT=${MFBD_FMU_BINARY_ROOT}
       -DMFBD_FMU_ONLY=ON
+      -DMFBD_KLU_SOURCE_DIR=${MFBD_KLU_SOURCE_DIR}  # fetched once, by this build
     INSTALL_COMMAND ""
     BUILD_ALWAYS ON  # its own build tool decides what is out of date
     BUILD_BYPRODUCTS "${MFBD_FMU_BINARY_ROOT}/win64/mfbd_fmu.dll" "${MFBD_FMU_BINARY_ROOT}/win64/pid_controller.dll"

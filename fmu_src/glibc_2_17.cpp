@@ -21,6 +21,7 @@ void* memcpy_glibc_2_2_5(void*, const void*, std::size_t);
 double exp_glibc_2_2_5(double);
 double log_glibc_2_2_5(double);
 double pow_glibc_2_2_5(double, double);
+double hypot_glibc_2_2_5(double, double);  // SuiteSparse_config's default hypot
 int pthread_once_glibc_2_2_5(int*, void (*)());
 // Thread-specific keys and read-write locks: libstdc++'s pmr pools, which
 // its from_chars(double) uses, moved from libpthread to libc in glibc 2.34.
@@ -36,6 +37,7 @@ __asm__(".symver memcpy_glibc_2_2_5, memcpy@GLIBC_2.2.5");
 __asm__(".symver exp_glibc_2_2_5, exp@GLIBC_2.2.5");
 __asm__(".symver log_glibc_2_2_5, log@GLIBC_2.2.5");
 __asm__(".symver pow_glibc_2_2_5, pow@GLIBC_2.2.5");
+__asm__(".symver hypot_glibc_2_2_5, hypot@GLIBC_2.2.5");
 __asm__(".symver pthread_once_glibc_2_2_5, pthread_once@GLIBC_2.2.5");
 __asm__(".symver pthread_key_create_glibc_2_2_5, pthread_key_create@GLIBC_2.2.5");
 __asm__(".symver pthread_key_delete_glibc_2_2_5, pthread_key_delete@GLIBC_2.2.5");
@@ -49,6 +51,7 @@ void* __wrap_memcpy(void* to, const void* from, std::size_t n) { return memcpy_g
 double __wrap_exp(double x) { return exp_glibc_2_2_5(x); }
 double __wrap_log(double x) { return log_glibc_2_2_5(x); }
 double __wrap_pow(double x, double y) { return pow_glibc_2_2_5(x, y); }
+double __wrap_hypot(double x, double y) { return hypot_glibc_2_2_5(x, y); }
 int __wrap_pthread_once(int* once, void (*routine)()) { return pthread_once_glibc_2_2_5(once, routine); }
 int __wrap_pthread_key_create(pthread_key_t* key, void (*destructor)(void*)) {
   return pthread_key_create_glibc_2_2_5(key, destructor);

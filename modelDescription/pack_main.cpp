@@ -4,6 +4,9 @@
 //   resources/visual/<file>    mesh files (STL, OBJ) named by the bodies' "visual"
 //   binaries/linux64/<id>.so   the FMU binary of each platform built (or asked
 //   binaries/win64/<id>.dll    for), renamed to the model identifier
+//   documentation/licenses/    the licences of the libraries in the binaries
+//                              (the binaries folder's licenses/)
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -106,6 +109,21 @@ void addBinaries(const fs::path& root, const std::string& asked, const std::stri
     throw std::runtime_error("binaries folder '" + root.string() + "' has no FMU binary (build the project first)");
 }
 
+// documentation/licenses/<file> for each file of the binaries folder's
+// licenses/: the binaries link LGPL code (KLU), whose licence goes with them.
+void addLicenses(const fs::path& root, std::vector<mfbd::ZipEntry>& entries) {
+  const fs::path dir = root / "licenses";
+  if (!fs::is_directory(dir))
+    throw std::runtime_error("binaries folder '" + root.string() +
+                             "' has no licenses/ (the licences of the libraries in the binaries; build the project)");
+  std::vector<fs::path> files;
+  for (const auto& file : fs::directory_iterator(dir))
+    if (file.is_regular_file()) files.push_back(file.path());
+  std::sort(files.begin(), files.end());
+  for (const fs::path& file : files)
+    entries.push_back({"documentation/licenses/" + file.filename().string(), readFile(file)});
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -155,6 +173,7 @@ int main(int argc, char** argv) {
     entries.push_back({"resources/scene.json", text});
     for (auto& mesh : visualMeshFiles(text, fs::path(scenePath).parent_path())) entries.push_back(std::move(mesh));
     addBinaries(binaries, platform, id, entries);
+    addLicenses(binaries, entries);
     mfbd::writeZip(outPath, entries);
     std::cout << "mfbd-pack: wrote " << outPath << " (" << table.size() << " variables)\n";
   } catch (const std::exception& e) {

@@ -9,7 +9,7 @@ cd "$root"
 # modelDescription.xml with them, on the build host only.
 # MinGW-w64 (POSIX threads) cross-compiles the win64 FMU binary; wine runs
 # it in the tests (tests/python/test_platforms.py).
-packages=(cmake ninja-build g++ make binutils libeigen3-dev libsuitesparse-dev nlohmann-json3-dev
+packages=(cmake ninja-build g++ make binutils libeigen3-dev nlohmann-json3-dev
           libzip-dev libpugixml-dev
           libgtest-dev valgrind python3 python3-venv
           g++-mingw-w64-x86-64-posix gcc-mingw-w64-x86-64-posix wine wine64)

@@ -221,6 +221,32 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
   return true;
 }
 
+namespace {
+
+std::size_t flexibleBodyOf(const FlexibleMesh& mesh, int node) {
+  std::size_t f = 0;
+  while (node >= mesh.bodies[f].firstNode + mesh.bodies[f].nodeCount) ++f;
+  return f;
+}
+
+// A virtual body that only its weld holds (a free joint to ground).
+bool heldByWeldOnly(const Model& model, const FlexibleBodyJoint& w) {
+  const Joint& inboard = model.joints[model.bodies[w.virtualBody].inboardJoint];
+  return inboard.type == JointType::Free && inboard.parentMarker.body == kGroundIndex;
+}
+
+// Whether body b hangs (through the tree) below a virtual body held only by
+// its weld to a flexible body not carried yet: it moves when that one does.
+bool waitsForCarry(const Model& model, int b, const std::vector<bool>& carried) {
+  for (; b != kGroundIndex; b = model.joints[model.bodies[b].inboardJoint].parentMarker.body)
+    for (const FlexibleBodyJoint& w : model.flexibleBodyJoints)
+      if (w.virtualBody == b && heldByWeldOnly(model, w) && !carried[flexibleBodyOf(model.flexible, w.node)])
+        return true;
+  return false;
+}
+
+}  // namespace
+
 // A joint's initial coordinates move the links after it; a flexible body
 // that hangs from such a link (welded to a virtual body the tree carries)
 // moves with it, rigidly: nodes turned and shifted as the virtual body
@@ -228,11 +254,12 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
 // starts stretched between its design place and the moved link (a rod
 // under a link raised by 0.6 rad: 2.4e6 J of strain energy). Bodies with
 // supports stay where the scene puts them; a flexible body moves with the
-// first such link it hangs from.
+// first such link it hangs from. The carry goes on down: the virtual
+// bodies held only by their welds to a carried body's nodes move with it,
+// and with them what hangs from them (a payload, another flexible body).
 void Simulation::carryFlexibleBodies() {
   const Model& model = system_.model();
-  const FlexibleMesh& mesh = model.flexible;
-  if (mesh.bodies.empty() || model.flexibleBodyJoints.empty()) return;
+  if (model.flexible.bodies.empty() || model.flexibleBodyJoints.empty()) return;
   const int n = system_.velocityCount();
   Configuration design = state_.q;
   for (const Joint& j : model.joints) {
@@ -242,22 +269,30 @@ void Simulation::carryFlexibleBodies() {
   }
   system_.evaluateKinematics(state_.t, design, VectorXd::Zero(n), VectorXd::Zero(n));
   const std::vector<BodyKinematics> before = system_.data().body;
+  std::vector<bool> carried(model.flexible.bodies.size(), false);
+  while (carryOneFlexibleBody(before, carried)) {
+  }
+}
+
+// Carries the first flexible body not yet carried that hangs from a link
+// whose place is known (see carryFlexibleBodies); false when none is left.
+bool Simulation::carryOneFlexibleBody(const std::vector<BodyKinematics>& before, std::vector<bool>& carried) {
+  const Model& model = system_.model();
+  const FlexibleMesh& mesh = model.flexible;
+  const int n = system_.velocityCount();
   system_.evaluateKinematics(state_.t, state_.q, state_.v, VectorXd::Zero(n));
   const std::vector<BodyKinematics> after = system_.data().body;
-  std::vector<bool> carried(mesh.bodies.size(), false);
   for (const FlexibleBodyJoint& w : model.flexibleBodyJoints) {
-    const int v = w.virtualBody;
-    const Joint& inboard = model.joints[model.bodies[v].inboardJoint];
-    if (inboard.type == JointType::Free && inboard.parentMarker.body == kGroundIndex) continue;  // held by its weld
-    std::size_t f = 0;
-    while (w.node >= mesh.bodies[f].firstNode + mesh.bodies[f].nodeCount) ++f;
+    const std::size_t f = flexibleBodyOf(mesh, w.node);
     const FlexibleBody& body = mesh.bodies[f];
     bool free = true;
     for (int i = body.firstNode; i < body.firstNode + body.nodeCount; ++i) free = free && mesh.nodes[i].free;
-    if (carried[f] || !free) continue;
+    if (carried[f] || !free || heldByWeldOnly(model, w) || waitsForCarry(model, w.virtualBody, carried)) continue;
     carried[f] = true;
-    const Mat3 R = after[v].orientation * before[v].orientation.transpose();
-    const Vec3 shift = after[v].position - R * before[v].position;
+    const BodyKinematics& link = after[w.virtualBody];
+    const Mat3 R = link.orientation * before[w.virtualBody].orientation.transpose();
+    const Vec3 shift = link.position - R * before[w.virtualBody].position;
+    auto pointVelocity = [&](const Vec3& r) { return Vec3(link.velocity + link.angularVelocity.cross(r - link.position)); };
     for (int i = body.firstNode; i < body.firstNode + body.nodeCount; ++i) {
       const FlexNode& node = mesh.nodes[i];
       auto displacement = state_.q.scalars.segment<3>(node.scalarOffset);
@@ -265,10 +300,26 @@ void Simulation::carryFlexibleBodies() {
       const Vec3 r = R * (node.reference.r + displacement) + shift;
       displacement = r - node.reference.r;
       A = R * A;
-      state_.v.segment<3>(node.dof[0]) = after[v].velocity + after[v].angularVelocity.cross(r - after[v].position);
-      state_.v.segment<3>(node.dof[3]) = A.transpose() * after[v].angularVelocity;
+      state_.v.segment<3>(node.dof[0]) = pointVelocity(r);
+      state_.v.segment<3>(node.dof[3]) = A.transpose() * link.angularVelocity;
     }
+    // The free joint (to ground) of each virtual body welded to this body's
+    // nodes: from P C^-1 at zero coordinates to (R, shift) P C^-1, so the
+    // joint's motion is P^-1 (R, shift) P; its rates [ddot in P; omega in C].
+    for (const FlexibleBodyJoint& held : model.flexibleBodyJoints) {
+      if (!heldByWeldOnly(model, held) || flexibleBodyOf(mesh, held.node) != f) continue;
+      const Joint& j = model.joints[model.bodies[held.virtualBody].inboardJoint];
+      const Mat3& P = j.parentMarker.orientation;
+      const Vec3& p = j.parentMarker.position;
+      const Mat3 Q = P.transpose() * R * P;
+      state_.q.rotations[j.rotation] = Q;
+      state_.q.scalars.segment<3>(j.scalarOffset) = P.transpose() * (R * p + shift - p);
+      state_.v.segment<3>(j.velocityOffset) = P.transpose() * pointVelocity(R * p + shift);  // the marker's origin
+      state_.v.segment<3>(j.velocityOffset + 3) = (P * Q).transpose() * link.angularVelocity;
+    }
+    return true;
   }
+  return false;
 }
 
 bool Simulation::initialize(double t0, std::string& message, std::vector<std::string>* notes) {

@@ -119,6 +119,7 @@ class Simulation {
   double quaternion(std::size_t i, const Mat3& A, int component) const;
   bool assembleConstraints(std::string& message, std::vector<std::string>* notes);
   void carryFlexibleBodies();
+  bool carryOneFlexibleBody(const std::vector<BodyKinematics>& before, std::vector<bool>& carried);
   std::string constraintOwner(int row) const;
   std::string constraintOwners(const std::vector<int>& rows) const;
   Eigen::MatrixXd constraintJacobian(const Configuration& q, const VectorXd& v);

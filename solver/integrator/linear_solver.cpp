@@ -3,11 +3,7 @@
 #include <algorithm>
 
 #include <Eigen/Dense>
-#ifdef MFBD_KLU
 #include <klu.h>
-#else
-#include <Eigen/SparseLU>
-#endif
 
 #include "integrator/block_tridiagonal.hpp"
 
@@ -49,7 +45,6 @@ bool SparseAssembly::valid() const {
   return true;
 }
 
-#ifdef MFBD_KLU
 namespace {
 // KLU's user ordering hook: keep the columns as given (pre-permuted).
 int32_t keepOrder(int32_t n, int32_t*, int32_t*, int32_t* permutation, klu_common*) {
@@ -116,41 +111,6 @@ struct KluFactors {
   }
 };
 using SparseFactors = KluFactors;
-#else
-// Eigen's sparse LU where KLU is not built (the win64 binary): the same
-// analyse / factorize / solve steps, with KLU's pivot tolerance (a diagonal
-// pivot is kept down to 1e-3 of its column's largest entry), so that both
-// binaries follow the same pivots up to round-off.
-struct EigenSparseFactors {
-  Eigen::SparseLU<SparseMatrix, Eigen::COLAMDOrdering<int>> fillReducing;
-  Eigen::SparseLU<SparseMatrix, Eigen::NaturalOrdering<int>> inGivenOrder;
-  bool ordered = false;
-  bool lastFull = false;  // every factorization is a full one: the last matrix is its history
-  bool analyze(const SparseMatrix& A, bool givenOrder) {
-    ordered = givenOrder;
-    if (ordered) {
-      inGivenOrder.setPivotThreshold(1e-3);
-      inGivenOrder.analyzePattern(A);
-    } else {
-      fillReducing.setPivotThreshold(1e-3);
-      fillReducing.analyzePattern(A);
-    }
-    return true;
-  }
-  bool factorize(const SparseMatrix& A) {
-    if (ordered) {
-      inGivenOrder.factorize(A);
-      return inGivenOrder.info() == Eigen::Success;
-    }
-    fillReducing.factorize(A);
-    return fillReducing.info() == Eigen::Success;
-  }
-  Eigen::VectorXd solve(const Eigen::VectorXd& b) {
-    return ordered ? Eigen::VectorXd(inGivenOrder.solve(b)) : Eigen::VectorXd(fillReducing.solve(b));
-  }
-};
-using SparseFactors = EigenSparseFactors;
-#endif
 
 struct LinearSolver::Impl {
   using Permutation = Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int>;
@@ -162,9 +122,8 @@ struct LinearSolver::Impl {
   Permutation rows, columns;
   SparseMatrix permuted;
   Eigen::PartialPivLU<Eigen::MatrixXd> dense;
-  // The sparse LU (KLU, or Eigen's where KLU is not built) holds handles
-  // that are not copied; a copy of the
-  // solver (state saving) re-analyses lazily.
+  // KLU holds handles that are not copied; a copy of the solver (state
+  // saving) re-analyses lazily.
   std::unique_ptr<SparseFactors> klu;
   bool analyzed = false;
   // A beam line's block-tridiagonal matrix: block LU (blockTridiagonal),
