@@ -45,7 +45,11 @@ SHORTER_SPAN = {"spin_up_beam": 0.5, "motor_spin_up": 0.5, "n_four_bar": 0.6, "b
 # SparseLU, 1.08e-9 also with KLU 7.1 on win64 against Debian's KLU 5.12 on
 # linux64: the linear solver is not the cause). A shorter span does not
 # help (the scale is smaller early on).
-LOOSER = {"flexible_robot_arm": 1.5e-9}
+# bricard (a redundant constraint): the Newton predictor extrapolates the
+# multipliers, whose split over the redundant rows follows round-off, so
+# the math libraries' last bits reach the rates sooner: 2.1e-9 of scale
+# within 0.2 s (J1.angle_rate). Open: extrapolate only the minimum-norm part.
+LOOSER = {"flexible_robot_arm": 1.5e-9, "bricard": 2.5e-9}
 
 
 def binaries(fmu, platform):
