@@ -186,7 +186,8 @@ double Simulation::rateFromState(const Quantity& q) {
 // resolves the motion in, eps2 1e-1 h_max; for the second difference at
 // least 1e-4 s: the consistent solves carry round-off of ~1e-12 of the
 // forces, which it divides by eps2^2 (slider_crank: 40 N/s^2 of 4920 at
-// eps2 = 1e-5 s). Inputs are held (zero-order hold).
+// eps2 = 1e-5 s). Inputs follow their signals (System::inputsAt): held, or
+// along the derivatives fmi2SetRealInputDerivatives gave.
 std::vector<double> Simulation::outputDerivatives(const std::vector<Quantity>& outputs, const std::vector<int>& orders) {
   // 0: difference of order 1; 1: difference of exact rates, order 2; 2: second
   // difference; 3, 4: exact of order 1, 2

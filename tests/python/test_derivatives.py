@@ -337,3 +337,41 @@ def test_derivative_calls_leave_the_run_bit_for_bit_unchanged(tmp_path):
     finally:
         a.free()
         b.free()
+
+
+def test_force_derivatives_follow_the_input_derivatives(tmp_path):
+    """A hinge torque ramped at 50 N m/s (fmi2SetRealInputDerivatives) moves
+    the pendulum's tangential reaction at 50 N/s (length 1 m) at once: the
+    output derivative says so, as central differences of the output over
+    two steps of 1e-4 s do; with the torque held it is ~0."""
+    fmu = FMUS / "pendulum.fmu"
+
+    def slave(ramp):
+        s = Slave(fmu)
+        s.start({"angle0": 0.3})
+        s.set("hinge.torque", 2.0)
+        if ramp:
+            s.fmu.setRealInputDerivatives([s.vr["hinge.torque"]], [1], [ramp])
+        return s
+
+    h, reaction = 1e-4, "hinge.reaction_force.y"
+    s = slave(50.0)
+    values = [s.get(reaction)]
+    for k in range(2):
+        assert s.step(k * h, h) == 0
+        s.set("hinge.torque", 2.0 + 50.0 * (k + 1) * h)
+        s.fmu.setRealInputDerivatives([s.vr["hinge.torque"]], [1], [50.0])
+        values.append(s.get(reaction))
+    s.free()
+    s = slave(50.0)
+    assert s.step(0.0, h) == 0
+    s.set("hinge.torque", 2.0 + 50.0 * h)
+    s.fmu.setRealInputDerivatives([s.vr["hinge.torque"]], [1], [50.0])
+    derivative = s.fmu.getRealOutputDerivatives([s.vr[reaction]], [1])[0]
+    s.free()
+    assert abs(derivative - (values[2] - values[0]) / (2 * h)) < 1e-6 * 50.0
+    assert abs(derivative - 50.0) < 1e-3
+    s = slave(0.0)
+    assert s.step(0.0, h) == 0
+    assert abs(s.fmu.getRealOutputDerivatives([s.vr[reaction]], [1])[0]) < 1e-6
+    s.free()
