@@ -40,8 +40,10 @@ bool readFile(const std::string& path, std::string& text) {
 
 bool Instance::logs(fmi2Status status, const char* category) const {
   if (!callbacks_.logger) return false;
-  // Errors and discards always reach the importer; the rest when enabled.
-  const bool always = status == fmi2Error || status == fmi2Fatal || status == fmi2Discard;
+  // Warnings, errors and discards always reach the importer (a warning
+  // says that something the scene asked for was changed); the rest when
+  // enabled.
+  const bool always = status != fmi2OK;
   return always || (loggingOn_ && (categories_.empty() || categories_.count(category) || categories_.count("logAll")));
 }
 
@@ -170,6 +172,8 @@ bool Instance::buildSimulation(const char* function) {
     return false;
   }
   for (const std::string& note : notes) log(fmi2OK, "logEvents", note);
+  for (const std::string& warning : simulation_->warnings())
+    log(fmi2Warning, "logStatusWarning", std::string(function) + ": " + warning);
   simulationStale_ = false;
   lastSuccessfulTime_ = startTime_;
   return true;
@@ -182,11 +186,12 @@ fmi2Status Instance::enterInitializationMode() {
   }
   state_ = FmuState::InitializationMode;
   log(fmi2OK, "logEvents", "initialization mode at t = " + numberText(startTime_));
-  return fmi2OK;
+  return simulation_->warnings().empty() ? fmi2OK : fmi2Warning;
 }
 
 fmi2Status Instance::exitInitializationMode() {
-  if ((simulationStale_ || !simulation_) && !buildSimulation("fmi2ExitInitializationMode")) {
+  const bool rebuild = simulationStale_ || !simulation_;
+  if (rebuild && !buildSimulation("fmi2ExitInitializationMode")) {
     state_ = FmuState::Error;
     return fmi2Error;
   }
@@ -199,7 +204,7 @@ fmi2Status Instance::exitInitializationMode() {
   }
   for (const std::string& note : notes) log(fmi2OK, "logEvents", note);
   state_ = FmuState::StepComplete;
-  return fmi2OK;
+  return rebuild && !simulation_->warnings().empty() ? fmi2Warning : fmi2OK;
 }
 
 std::string Instance::solverStatistics() const {

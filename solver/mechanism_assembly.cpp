@@ -128,6 +128,7 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
               "; keep fewer rates, or rates the constraints allow";
     return false;
   }
+  warnGivenRatesChanged(dv);
   if (notes) {
     for (const Joint& j : system_.model().joints) {
       if (j.cut || j.dofs == 0 || j.scalarOffset < 0) continue;
@@ -140,6 +141,27 @@ bool Simulation::assembleConstraints(std::string& message, std::vector<std::stri
     }
   }
   return true;
+}
+
+// Rates the scene gave (initial.rates) that the velocity projection changed:
+// the user meant them, so the change is a warning, not a note.
+void Simulation::warnGivenRatesChanged(const VectorXd& dv) {
+  const double tol = std::max(scene_.solver.tolerance, 1e-9 * std::max(1.0, state_.v.lpNorm<Eigen::Infinity>()));
+  for (const JointSpec& spec : scene_.joints) {
+    if (spec.initialRates.empty() || spec.keepRates) continue;
+    for (const Joint& j : system_.model().joints) {
+      if (j.name != spec.name || j.cut || j.dofs == 0) continue;
+      const VectorXd change = dv.segment(j.velocityOffset, j.dofs);
+      if (change.lpNorm<Eigen::Infinity>() <= tol) continue;
+      std::string now;
+      for (int k = 0; k < j.dofs; ++k)
+        now += (k ? ", " : "") + numberText(state_.v[j.velocityOffset + k]);
+      warnings_.push_back("the assembly changed the initial rates of joint '" + j.name + "' (initial.rates) by " +
+                          numberText(change.lpNorm<Eigen::Infinity>()) + " to [" + now +
+                          "], the least change that meets the velocity constraints; set initial.keep_rates to "
+                          "keep them and adjust the other joints");
+    }
+  }
 }
 
 namespace {

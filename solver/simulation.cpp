@@ -96,6 +96,7 @@ Simulation::Simulation(const Scene& scene)
 
 bool Simulation::initialize(double t0, std::string& message, std::vector<std::string>* notes) {
   state_.t = t0;
+  warnings_.clear();
   // Inputs and derivatives set before the start hold from the start time.
   for (InputSignals* s : {&system_.jointSignals(), &system_.forceSignals(), &system_.flexibleSignals()})
     s->anchor.setConstant(t0);

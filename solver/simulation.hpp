@@ -76,6 +76,10 @@ class Simulation {
   AdvanceResult doStep(double t, double H);
   AdvanceResult doStep(double H) { return doStep(state_.t, H); }
 
+  // What the initialization changed of what the scene asked for (given
+  // initial rates the assembly adjusted): for the log at warning level.
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
   double time() const { return state_.t; }
   const IntegratorState& state() const { return state_; }
   const System& system() const { return system_; }
@@ -118,6 +122,7 @@ class Simulation {
   void updateQuaternions(bool reset);
   double quaternion(std::size_t i, const Mat3& A, int component) const;
   bool assembleConstraints(std::string& message, std::vector<std::string>* notes);
+  void warnGivenRatesChanged(const VectorXd& dv);
   void carryFlexibleBodies();
   bool carryOneFlexibleBody(const std::vector<BodyKinematics>& before, std::vector<bool>& carried);
   std::string constraintOwner(int row) const;
@@ -143,6 +148,7 @@ class Simulation {
   Quat outputQuaternion(std::size_t i, const Mat3& A) const;
 
   const Scene scene_;
+  std::vector<std::string> warnings_;
   System system_;
   std::unique_ptr<TimeStepper> stepper_;
   IntegratorState state_;

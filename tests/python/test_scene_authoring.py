@@ -235,3 +235,34 @@ def test_kept_rates_that_break_the_loop_are_refused(tmp_path):
             in slave.messages(), slave.messages()
     finally:
         slave.free()
+
+
+def initialization_log(tmp_path, s, name):
+    from conftest import OK, Slave
+    slave = Slave(packed(s, tmp_path, name))
+    try:
+        assert slave.instantiate(logging_on=False), slave.messages()
+        assert slave.call("setupExperiment", None, 0.0, None) == OK
+        status = slave.fmu.fmi2EnterInitializationMode(slave.fmu.component)
+        return status, slave.log
+    finally:
+        slave.free()
+
+
+def test_changed_given_rates_are_a_warning_with_logging_off(tmp_path):
+    """The crank's given 6 rad/s changed by the velocity projection: the
+    FMU says so at warning level, with the amount and the new rate, even
+    with logging off (fmi2EnterInitializationMode returns fmi2Warning).
+    Kept, or not given at all, nothing is said."""
+    free = first_rates(tmp_path, four_bar_with_rates({"A": 6.0}, keep=()), "rates")
+    status, log = initialization_log(tmp_path, four_bar_with_rates({"A": 6.0}, keep=()), "free")
+    assert status == 1, log  # fmi2Warning
+    warnings = [(c, m) for st, c, m in log if st == 1]
+    assert len(warnings) == 1 and warnings[0][0] == "logStatusWarning", log
+    match = re.search(r"initial rates of joint 'A' \(initial.rates\) by (\S+) to \[(\S+)\]", warnings[0][1])
+    assert match, warnings
+    assert float(match.group(1)) == pytest.approx(abs(6.0 - free["A"]), rel=1e-5)
+    assert float(match.group(2)) == pytest.approx(free["A"], rel=1e-5)
+    for s, name in ((four_bar_with_rates({"A": 6.0}, keep=("A",)), "kept"), (four_bar_with_rates({}, keep=()), "none")):
+        status, log = initialization_log(tmp_path, s, name)
+        assert status == 0 and not log, log
