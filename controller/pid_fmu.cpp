@@ -10,9 +10,9 @@
 #include <string>
 
 #include "fmi2Functions.h"
+#include "math/number_text.hpp"
 #include "pid.hpp"
 #include "resource_uri.hpp"
-#include "scene/number_text.hpp"
 
 namespace {
 

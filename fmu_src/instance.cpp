@@ -7,9 +7,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "math/number_text.hpp"
 #include "model_description.hpp"
 #include "resource_uri.hpp"
-#include "scene/number_text.hpp"
 
 namespace mfbd {
 
@@ -82,7 +82,7 @@ Instance* Instance::create(const std::string& name, const std::string& guid, con
   try {
     c->scene_ = parseScene(c->sceneText_);
     Simulation check(c->scene_);  // assembly errors surface here, not later
-    c->table_ = variableTable(c->scene_, ModelNumbering(check.system().model()));
+    c->table_ = variableTable(c->scene_, check.numbering());
   } catch (const SceneError& e) {
     c->fail("fmi2Instantiate", std::string("resources/scene.json: ") + e.what());
     return nullptr;
@@ -143,8 +143,7 @@ std::unique_ptr<Simulation> Instance::makeSimulation(const std::vector<double>& 
   Scene scene = parseScene(sceneText_, user);
   for (std::size_t i = 0; i < table_.size(); ++i)
     if (table_[i].causality == Causality::Parameter) setSceneParameter(scene, table_[i].quantity, values[i]);
-  scene.solver.errorTolerance = tolerance;
-  return std::make_unique<Simulation>(scene);
+  return std::make_unique<Simulation>(scene, tolerance);
 }
 
 // Scene with the current parameter values -> Simulation at startTime.

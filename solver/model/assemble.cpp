@@ -5,7 +5,6 @@
 #include <map>
 
 #include "coupling/joint_constraint.hpp"
-#include "model/mass_check.hpp"
 #include "model/model.hpp"
 #include "scene/joint_dofs.hpp"
 
@@ -80,7 +79,7 @@ Model assemble(const Scene& scene) {
   Model model;
   model.name = scene.name;
   model.gravity = scene.gravity;
-  model.solver = scene.solver;
+  model.newtonMatrix = scene.solver.newtonMatrix;
 
   std::map<std::string, int> sceneBodyIndex;
   const std::vector<int> order = treeOrder(scene, sceneBodyIndex);
@@ -208,7 +207,6 @@ Model assemble(const Scene& scene) {
     model.constraintCount += 6;
     model.flexibleBodyJoints.push_back(w);
   }
-  checkMassMatrix(scene, model);
   return model;
 }
 
