@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "entry_point.hpp"
 #include "math/number_text.hpp"
 #include "model_description.hpp"
 #include "resource_uri.hpp"
@@ -47,9 +48,7 @@ bool Instance::logs(fmi2Status status, const char* category) const {
 
 void Instance::log(fmi2Status status, const char* category, const std::string& message) const {
   if (!logs(status, category)) return;
-  std::string escaped;  // the logger takes a printf format
-  for (char c : message) escaped += c == '%' ? std::string("%%") : std::string(1, c);
-  callbacks_.logger(callbacks_.componentEnvironment, name_.c_str(), status, category, escaped.c_str());
+  callbacks_.logger(callbacks_.componentEnvironment, name_.c_str(), status, category, loggerFormat(message).c_str());
 }
 
 fmi2Status Instance::fail(const char* function, const std::string& message) {
