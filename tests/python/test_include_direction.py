@@ -1,6 +1,7 @@
 """The direction of dependencies (docs/design.md 2): each layer of the solver
-includes only the layers before it, and the FMI layer reaches the solver
-through the Simulation. Reads the project's own #include lines."""
+includes only the layers before it, the FMI layer reaches the solver
+through the Simulation, and the controller FMU knows no mechanics. Reads
+the project's own #include lines."""
 import re
 
 import pytest
@@ -20,6 +21,7 @@ BEFORE = {
     "simulation": ["math", "scene", "flex", "coupling", "model", "rigid", "integrator", "system"],
     "modelDescription": ["math", "scene", "model", "simulation"],
     "fmu_src": ["math", "scene", "simulation", "modelDescription"],
+    "controller": ["math", "fmu_src"],
 }
 # The files directly in solver/: the System and its job files, then the
 # Simulation's. A new file there is placed here on purpose.
@@ -34,7 +36,7 @@ INCLUDE = re.compile(r'^#include "([^"]+)"', re.MULTILINE)
 def layer_of(path):
     """The layer of a source file (a path relative to the root), or None."""
     parts = path.parts
-    if parts[0] in ("modelDescription", "fmu_src"):
+    if parts[0] in ("modelDescription", "fmu_src", "controller"):
         return parts[0]
     if parts[0] != "solver":
         return None
@@ -47,7 +49,7 @@ def layer_of(path):
 
 
 def sources():
-    for folder in ("solver", "modelDescription", "fmu_src"):
+    for folder in ("solver", "modelDescription", "fmu_src", "controller"):
         for path in sorted((ROOT / folder).rglob("*")):
             if path.suffix in (".hpp", ".cpp", ".h"):
                 yield path.relative_to(ROOT)
@@ -55,7 +57,7 @@ def sources():
 
 def included_layer(source, name):
     """The layer of the project file an include names, or None (a library's)."""
-    for base in (ROOT / source.parent, ROOT / "solver", ROOT / "modelDescription"):
+    for base in (ROOT / source.parent, ROOT / "solver", ROOT / "modelDescription", ROOT / "fmu_src"):
         if (base / name).is_file():
             return layer_of((base / name).resolve().relative_to(ROOT))
     return None
