@@ -1,6 +1,9 @@
-"""Shared pieces of the Exudyn peer studies (peer_*.py): driving our FMU,
-Exudyn solver settings, best-of-N timing, and the CSV / log-log plot every
-study writes.
+"""The harness of the Exudyn peer studies (peer_*.py): a study is its
+physics (the problem's data, our run, the peer's runs, the error) in a
+PeerStudy, which runs every code at every setting (best of N), writes the
+CSVs and draws the error against wall time; and the pieces studies share:
+driving our FMU, Exudyn's solver settings and common elements, the smooth
+spin-up drive, Richardson extrapolation.
 
 Timing rule, both codes: time.perf_counter around the simulation only.
 Ours: fmi2EnterInitializationMode .. the last fmi2DoStep (instantiation,
@@ -12,6 +15,7 @@ import argparse
 import copy
 import csv
 import ctypes
+import dataclasses
 import pathlib
 import re
 import shutil
@@ -24,7 +28,7 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "python"))
-from conftest import FMUS, Slave, load_scene, packed  # noqa: E402,F401
+from conftest import FMUS, Slave, load_scene, packed  # noqa: E402
 
 OURS = "MFBD-FMU"
 EXUDYN = "Exudyn"
@@ -80,6 +84,22 @@ class FmuRun:
     def initialize(self):
         assert self.slave.call("enterInitializationMode") == 0, self.slave.messages()
         assert self.slave.call("exitInitializationMode") == 0, self.slave.messages()
+
+    def at_end(self, names, stop, communication):
+        """Initializes, steps to `stop` by `communication` and reads `names`
+        there only (none: nothing), then frees the instance: (the values, the
+        wall time of initialization and steps, statistics)."""
+        try:
+            start = time.perf_counter()
+            self.initialize()
+            for _ in range(int(round(stop / communication))):
+                self.step(communication)
+            wall = time.perf_counter() - start
+            values = self.get(*names) if names else None
+            statistics = self.statistics()
+        finally:
+            self.free()
+        return values, wall, statistics
 
     def step(self, h):
         status = self._do_step(self._component, self.t, h, 1)
@@ -246,6 +266,50 @@ def exudyn_clamp_coordinates(mbs, node, count):
         for c in range(count)]
 
 
+def cantilever_scene(example, n):
+    """An example cantilever (examples/<example>) with n elements, its loads
+    moved to the tip node and that node as the output."""
+    scene = load_scene(example)
+    body = scene["flexible_bodies"][0]
+    body["beam"]["elements"] = n
+    body["loads"] = [dict(load, node=n) for load in body["loads"]]
+    body["outputs"] = {"nodes": [n]}
+    return scene
+
+
+def spin_up_angle(t, omega, ramp, cos=np.cos, where=np.where):
+    """The smooth spin-up of Simo and Vu-Quoc (F4, F5, F6): theta(t) =
+    (omega/T)(t^2/2 + (T/(2 pi))^2 (cos(2 pi t/T) - 1)) up to T = ramp, then
+    omega T/2 + omega (t - T). As numbers, or as an Exudyn symbolic
+    expression given its cos and IfThenElse."""
+    up = omega / ramp * (t * t / 2 + (ramp / (2 * np.pi))**2 * (cos(2 * np.pi / ramp * t) - 1))
+    return where(t <= ramp, up, omega * ramp / 2 + omega * (t - ramp))
+
+
+def exudyn_spin_up_drive(mbs, connector, omega, ramp):
+    """Drives the offset of an Exudyn coordinate constraint along the spin-up
+    angle, and its rate, by symbolic user functions (an expression tree
+    evaluated in C++: no Python call per Newton iteration). Returns them:
+    they must stay alive through the solve."""
+    import exudyn as exu
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+
+    sym = exu.symbolic
+
+    def angle(mbs, t, itemNumber, lOffset):
+        return spin_up_angle(t, omega, ramp, sym.cos, sym.IfThenElse)
+
+    def rate(mbs, t, itemNumber, lOffset):
+        up = omega / ramp * (t - ramp / (2 * np.pi) * sym.sin(2 * np.pi / ramp * t))
+        return sym.IfThenElse(t <= ramp, up, sym.Real(omega))
+
+    functions = []
+    for function, name in ((angle, "offsetUserFunction"), (rate, "offsetUserFunction_t")):
+        functions.append(CreateSymbolicUserFunction(mbs, function, name, connector))
+        mbs.SetObjectParameter(connector, name, functions[-1])
+    return functions
+
+
 def study_arguments(doc, repeats, fmu=None, extra=()):
     """The command line of a peer study: --out (made if missing), --repeats,
     --fmu when the study runs one packed FMU, and `extra` as (flag, kwargs)."""
@@ -333,6 +397,17 @@ def plot_precision_work(ax, rows, error_key="error", annotate="h_or_elements", f
     legend_below(ax)
 
 
+def draw_curves(ax, t, curves, ylabel, title):
+    """Curves over time, each (values, matplotlib format, line width, label)."""
+    for values, style, width, label in curves:
+        ax.plot(t, values, style, lw=width, label=label)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+
+
 def legend_below(ax):
     """The legend under the axes (outside the data), one entry a line."""
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), borderaxespad=0.0)
@@ -349,22 +424,157 @@ def refinement_grid(pairs, meshes=2):
     return grid
 
 
-def grid_study(label, runs, grid, repeats, measure):
-    """Every (code, model, run) of `runs` at every (n, h) of `grid`, the best
-    of `repeats`: one row per run with the columns every study has and
-    measure(result)'s own (a dict with the error, and a text for the log
-    line)."""
+STATISTICS = ("steps", "newton_iterations", "factorizations", "rejected_steps")
+
+
+def sweep(label, codes, settings, repeats, measure, keep=None):
+    """Every (code, model, run) of `codes` at every setting, the best of
+    `repeats`: one row per run. A setting is a substep h or an element count
+    n (run(setting)), or a pair (n, h) (run(n, h)); the row has the code,
+    the setting (h_or_elements, and h_s for a pair), the wall time, the
+    model, measure(result, code)'s columns (the error among them) and the
+    solver's statistics. keep: a dict that gets each best result by (code,
+    setting), for a study that draws its runs' curves."""
     rows = []
-    for code, model, run in runs:
-        for n, h in grid:
-            r = best_of(lambda: run(n, h), repeats)
-            columns, text = measure(r)
-            rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"], model=model, h_s=h, **columns,
-                             steps=r["steps"], newton_iterations=r["newton_iterations"],
-                             factorizations=r.get("factorizations", ""), rejected_steps=r.get("rejected_steps", "")))
-            print(f"{label} {code:9s} n={n:4d} h={h:8.2e}  wall {r['wall_time_s']:7.3f} s  {text}  Newton it/step "
-                  f"{r['newton_iterations'] / r['steps']:.2f}", flush=True)
+    for code, model, run in codes:
+        for setting in settings:
+            pair = isinstance(setting, tuple)
+            r = best_of(lambda: run(*setting) if pair else run(setting), repeats)
+            if keep is not None:
+                keep[(code, setting)] = r
+            rows.append(result_row(label, code, model, setting, r, measure(r, code)))
     return rows
+
+
+def result_row(label, code, model, setting, r, columns):
+    """The CSV row of one run (see sweep), and its log line."""
+    pair = isinstance(setting, tuple)
+    row = dict(code=code, h_or_elements=setting[0] if pair else setting, wall_time_s=r["wall_time_s"], model=model)
+    if pair:
+        row["h_s"] = setting[1]
+    where = f"n={setting[0]:<4d} h={setting[1]:8.2e}" if pair else f"{setting:g}"
+    text = "  ".join(f"{k} {v:.3e}" if isinstance(v, float) else f"{k} {v}" for k, v in columns.items())
+    print(f"{label} {code:9s} {model}  {where}  wall {r['wall_time_s'] * 1e3:9.2f} ms  {text}  "
+          f"Newton it/step {r['newton_iterations'] / r['steps']:.2f}", flush=True)
+    return dict(row, **columns, **{k: r.get(k, "") for k in STATISTICS})
+
+
+def measured(r, code=None):
+    """A result's own columns: the numbers and texts it carries beyond the
+    wall time and the statistics (curves stay out of the CSV)."""
+    return {k: v for k, v in r.items()
+            if k != "wall_time_s" and k not in STATISTICS and isinstance(v, (int, float, str))}
+
+
+@dataclasses.dataclass
+class Panel:
+    """One axes of error against wall time: the rows' column `error_key`."""
+    ylabel: str
+    title: str
+    error_key: str = "error"
+    floor: float = 1e-16
+    fontsize: int = 9
+
+
+FIGURE_SIZES = {1: (7.5, 5), 2: (12, 5), 3: (16, 5)}
+
+
+class PeerStudy:
+    """A peer study: a subclass gives its label and file name, the settings,
+    the codes (code, model, run) and the figure's panels; results of a run
+    are dicts with wall_time_s, the solver statistics and the measured
+    columns (measure() turns a run's raw quantities into errors where a
+    study needs a reference). main() parses the command line, runs every
+    code at every setting (or, with --replot, reads the CSVs back), writes
+    results/<name>_<table>.csv for each of `tables` and draws
+    results/<name>_precision.png. A study that computes references first,
+    or writes more tables, extends run(); one whose figure draws curves of
+    its runs (no --replot: the CSVs do not keep them) sets curves = True and
+    extends draw()."""
+
+    label = ""           # prefix of the log lines ("R1")
+    name = ""            # results/<name>_precision.csv, .png
+    repeats = 2          # best of, by default
+    fmu = None           # a packed example (--fmu), or None: the study packs its scenes (self.pack)
+    xlabel = ""          # the wall time's axis
+    annotate = "h_or_elements"  # the label of a point on the Pareto front (a column or a function of the row)
+    tables = ("precision",)
+    curves = False
+
+    settings = ()        # substeps h, element counts n, or pairs (n, h)
+
+    def codes(self):
+        """[(code, model, run)]: run(setting) -> result."""
+        raise NotImplementedError
+
+    def measure(self, r, code):
+        return measured(r)
+
+    def panels(self, tables):
+        raise NotImplementedError
+
+    def run(self):
+        """The tables of a run: {table: rows}."""
+        return {"precision": sweep(self.label, self.codes(), self.settings, self.args.repeats, self.measure)}
+
+    def draw(self, tables, png):
+        panels = self.panels(tables)
+        fig, axes = figure(len(panels), FIGURE_SIZES[len(panels)])
+        for ax, panel in zip(np.atleast_1d(axes), panels):
+            self.draw_panel(ax, tables["precision"], panel)
+        save_figure(fig, png)
+
+    def draw_panel(self, ax, rows, panel):
+        plot_precision_work(ax, rows, panel.error_key, self.annotate, panel.floor)
+        ax.set_xlabel(self.xlabel)
+        ax.set_ylabel(panel.ylabel)
+        ax.set_title(panel.title, fontsize=panel.fontsize)
+
+    def pack(self, scene, name):
+        """Our FMU of a scene variant (packed once per run of the study)."""
+        return self._factory.fmu(scene, name)
+
+    def main(self, doc):
+        self.args = study_arguments(doc, self.repeats, self.fmu)
+        paths = {t: self.args.out / f"{self.name}_{t}.csv" for t in self.tables}
+        if self.args.replot:
+            if self.curves:
+                sys.exit(f"--replot: the figure of {self.name} draws the runs' curves, which its CSVs do not keep")
+            tables = {t: read_csv(path) for t, path in paths.items()}
+        else:
+            self._factory = SceneFactory()
+            try:
+                tables = self.run()
+            finally:
+                self._factory.close()
+            for t, path in paths.items():
+                write_csv(path, tables[t])
+        self.draw(tables, self.args.out / f"{self.name}_precision.png")
+
+
+def extrapolated(coarse, fine):
+    """Richardson extrapolation for order 2 in the element size (n doubled)."""
+    return fine + (fine - coarse) / 3.0
+
+
+def extrapolated_references(label, runs, meshes, key, column):
+    """Each code's runs at `meshes` ((n, h), n doubling) and the extrapolation
+    of result[key] from the last two: (rows for a reference CSV, with the
+    value in `column`; {code: extrapolated value})."""
+    rows, values = [], {}
+    for code, run in runs:
+        found = []
+        for n, h in meshes:
+            r = run(n, h)
+            found.append(r[key])
+            rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"], error="", h_s=h,
+                             **{column: r[key]}, kind="run"))
+            print(f"{label} reference {code:9s} n={n:4d} h={h:7.1e}  {key} {r[key]:.9f}  "
+                  f"wall {r['wall_time_s']:.2f} s", flush=True)
+        values[code] = extrapolated(*found[-2:])
+        rows.append(dict(code=code, h_or_elements="extrapolated", wall_time_s="", error="", h_s=meshes[-1][1],
+                         **{column: values[code]}, kind="Richardson in n, order 2"))
+    return rows, values
 
 
 def mesh_and_step(row):
@@ -386,11 +596,9 @@ def save_figure(fig, path):
     print(f"wrote {pathlib.Path(path).resolve()}")
 
 
-def extrapolated_reference(path, column="tip_deflection_7s_m"):
-    """Our Richardson-extrapolated value from a study's reference CSV (to
-    redraw its figure)."""
-    row = next(r for r in read_csv(path) if r["code"] == OURS and r["h_or_elements"] == "extrapolated")
-    return float(row[column])
+def extrapolated_value(rows, column):
+    """Our extrapolated value in a study's reference rows (as written or read back)."""
+    return float(next(r[column] for r in rows if r["code"] == OURS and r["h_or_elements"] == "extrapolated"))
 
 
 def cheapest_at(rows, level, error_key="error"):

@@ -20,13 +20,10 @@ Exudyn, two elements:
     round-off at any element count (drawn at 1e-10 in the plot).
 Writes f1_end_moment_precision.csv and .png.
 """
-import time
-
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
-    exudyn_settings, exudyn_solve, figure, load_scene, plot_precision_work, read_csv, save_figure, study_arguments, \
-    write_csv
+from peer_common import EXUDYN, OURS, FmuRun, Panel, PeerStudy, cantilever_scene, exudyn_beam_line_2d, \
+    exudyn_clamp_coordinates, exudyn_settings, exudyn_solve
 
 L, EI = 1.0, 1.0
 EA = 1e7 * EI / L**2
@@ -42,27 +39,15 @@ def tip_error(x, y):
 
 
 def scene_with_elements(n):
-    scene = load_scene("cantilever_moment")
-    body = scene["flexible_bodies"][0]
-    body["beam"]["elements"] = n
-    body["loads"] = [dict(load, node=n) for load in body["loads"]]
-    body["outputs"] = {"nodes": [n]}
+    scene = cantilever_scene("cantilever_moment", n)
     scene["solver"]["h_max"] = LAMBDA / LOAD_STEPS
     return scene
 
 
 def ours(fmu, n):
     run = FmuRun(fmu, {"solver.tolerance": 1e-10})  # the scene's, as Exudyn's static solve
-    try:
-        start = time.perf_counter()
-        run.initialize()
-        run.step(LAMBDA)
-        wall = time.perf_counter() - start
-        x, y = run.get(f"beam.node{n}.position.x", f"beam.node{n}.position.y")
-        statistics = run.statistics()
-    finally:
-        run.free()
-    return dict(wall_time_s=wall, error=tip_error(x, y), **statistics)
+    (x, y), wall, statistics = run.at_end([f"beam.node{n}.position.x", f"beam.node{n}.position.y"], LAMBDA, LAMBDA)
+    return dict(wall_time_s=wall, error=tip_error(x, y), coordinates=6 * (n + 1), **statistics)
 
 
 def exudyn_beam_2d(n, sparse):
@@ -100,7 +85,7 @@ def exudyn_beam_3d(n, sparse):
     return mbs, nodes[-1]
 
 
-def exudyn_static(build, n):
+def exudyn_static(build, n, per_node):
     import exudyn as exu
 
     sparse = n >= 32  # Exudyn's faster linear solver at each size (dense LU below)
@@ -110,51 +95,24 @@ def exudyn_static(build, n):
     settings.staticSolver.numberOfLoadSteps = LOAD_STEPS
     wall, statistics = exudyn_solve(mbs, settings, static=True)
     p = mbs.GetNodeOutput(tip, exu.OutputVariableType.Position)
-    return dict(wall_time_s=wall, error=tip_error(p[0], p[1]), **statistics)
+    return dict(wall_time_s=wall, error=tip_error(p[0], p[1]), coordinates=per_node * (n + 1), **statistics)
 
 
-def run_study(args):
-    """Runs every code of the study; its rows."""
-    factory = SceneFactory()
-    try:
-        fmus = {n: factory.fmu(scene_with_elements(n), f"moment{n}") for n in ELEMENTS}
-        codes = [(OURS, "3D corotational beam", 6, lambda n: ours(fmus[n], n)),
-                 (EXUDYN, "BeamGeometricallyExact2D", 3, lambda n: exudyn_static(exudyn_beam_2d, n)),
-                 (EXUDYN, "BeamGeometricallyExact 3D (EP nodes)", 7, lambda n: exudyn_static(exudyn_beam_3d, n))]
-        rows = []
-        for code, model, per_node, run in codes:
-            for n in ELEMENTS:
-                r = best_of(lambda: run(n), args.repeats)
-                rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"], error=r["error"],
-                                 model=model, coordinates=per_node * (n + 1), load_steps=r["steps"],
-                                 newton_iterations=r["newton_iterations"],
-                                 factorizations=r.get("factorizations", ""),
-                                 rejected_steps=r.get("rejected_steps", "")))
-                print(f"F1 {code:9s} {model:38s} n={n:4d}  wall {r['wall_time_s'] * 1e3:9.2f} ms  "
-                      f"tip error {r['error']:9.2e} m  load steps {r['steps']}  Newton iterations "
-                      f"{r['newton_iterations']}", flush=True)
-    finally:
-        factory.close()
-    return rows
+class Study(PeerStudy):
+    label, name, repeats = "F1", "f1_end_moment", 3
+    settings, xlabel = ELEMENTS, "wall time of the static solve (5 load steps) [s]"
 
+    def codes(self):
+        fmus = {n: self.pack(scene_with_elements(n), f"moment{n}") for n in self.settings}
+        return [(OURS, "3D corotational beam", lambda n: ours(fmus[n], n)),
+                (EXUDYN, "BeamGeometricallyExact2D", lambda n: exudyn_static(exudyn_beam_2d, n, 3)),
+                (EXUDYN, "BeamGeometricallyExact 3D (EP nodes)", lambda n: exudyn_static(exudyn_beam_3d, n, 7))]
 
-def main():
-    args = study_arguments(__doc__, repeats=3)
-    csv_path = args.out / "f1_end_moment_precision.csv"
-    if args.replot:
-        rows = read_csv(csv_path)
-    else:
-        rows = run_study(args)
-        write_csv(csv_path, rows)
-
-    fig, ax = figure()
-    plot_precision_work(ax, rows, floor=1e-10)
-    ax.set_xlabel("wall time of the static solve (5 load steps) [s]")
-    ax.set_ylabel("tip position error at load factor 0.25 [m]")
-    ax.set_title("F1 end moment: error against run time (labels: elements; errors < 1e-10 drawn at 1e-10)", fontsize=9)
-    png = args.out / "f1_end_moment_precision.png"
-    save_figure(fig, png)
+    def panels(self, tables):
+        return [Panel("tip position error at load factor 0.25 [m]",
+                      "F1 end moment: error against run time (labels: elements; errors < 1e-10 drawn at 1e-10)",
+                      floor=1e-10)]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

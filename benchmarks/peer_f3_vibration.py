@@ -24,9 +24,8 @@ Writes f3_vibration_precision.csv and .png.
 import numpy as np
 from scipy.optimize import least_squares
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
-    exudyn_settings, exudyn_solve, figure, grid_study, load_scene, mesh_and_step, plot_precision_work, read_csv, \
-    refinement_grid, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, Panel, PeerStudy, cantilever_scene, exudyn_beam_line_2d, \
+    exudyn_clamp_coordinates, exudyn_settings, exudyn_solve, mesh_and_step, refinement_grid
 
 L, EI, RHO_A, EA, RHO_I = 1.0, 1.0, 1.0, 1e6, 1e-6
 PULSE, FORCE = 0.02, 0.01 * EI / L**2
@@ -65,42 +64,47 @@ def first_frequency(t, y, modes=EXACT):
 
 
 def vibration_scene(n):
-    scene = load_scene("cantilever_vibration")
-    body = scene["flexible_bodies"][0]
-    body["beam"]["elements"] = n
-    body["loads"] = [dict(load, node=n) for load in body["loads"]]
-    body["outputs"] = {"nodes": [n]}
+    scene = cantilever_scene("cantilever_vibration", n)
     scene["solver"]["rho_inf"] = RHO_INF
     return scene
 
 
-def ours(fmu, n, h):
+def ours(fmu, signal, h, modes=EXACT):
+    """f1 of our run: `signal` (a tip's y) sampled every OUTPUT from t = OUTPUT on."""
     run = FmuRun(fmu, {"solver.h_max": h})
-    s, wall, statistics = run.sample([f"beam.node{n}.position.y"], STOP, OUTPUT)
+    s, wall, statistics = run.sample([signal], STOP, OUTPUT)
     tip = s[1:, 0]  # from t = OUTPUT on
     t = OUTPUT * np.arange(1, len(tip) + 1)
-    return dict(wall_time_s=wall, f1=first_frequency(t, tip), **statistics)
+    return dict(wall_time_s=wall, f1=first_frequency(t, tip, modes), **statistics)
 
 
-def _pulse(mbs, t, loadVector):
+def exudyn_pulse(mbs, node, force):
+    """The tip force pulse force sin^2(pi t/PULSE) along y for t < PULSE on an
+    Exudyn node, as a symbolic user function; returns it (it must stay alive
+    through the solve)."""
     import exudyn as exu
-    sym = exu.symbolic
-    s = sym.sin(np.pi / PULSE * t)
-    return [0, sym.IfThenElse(t < PULSE, FORCE * s * s, sym.Real(0.0)), 0]
+    from exudyn.advancedUtilities import CreateSymbolicUserFunction
+    from exudyn.itemInterface import LoadForceVector, MarkerNodePosition
+
+    def pulse(mbs, t, loadVector):
+        s = exu.symbolic.sin(np.pi / PULSE * t)
+        return [0, exu.symbolic.IfThenElse(t < PULSE, force * s * s, exu.symbolic.Real(0.0)), 0]
+
+    load = mbs.AddLoad(LoadForceVector(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=node)),
+                                       loadVector=[0.0, 0.0, 0.0]))
+    function = CreateSymbolicUserFunction(mbs, pulse, "loadVectorUserFunction", load)
+    mbs.SetLoadParameter(load, "loadVectorUserFunction", function)
+    return function
 
 
 def exudyn_beam_2d(n, h):
     import exudyn as exu
-    from exudyn.advancedUtilities import CreateSymbolicUserFunction
-    from exudyn.itemInterface import LoadForceVector, MarkerNodePosition, SensorNode
+    from exudyn.itemInterface import SensorNode
 
     mbs = exu.SystemContainer().AddSystem()
     nodes = exudyn_beam_line_2d(mbs, n, L, RHO_A, RHO_I, EI, EA, EA)
     exudyn_clamp_coordinates(mbs, nodes[0], 3)
-    load = mbs.AddLoad(LoadForceVector(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[-1])),
-                                       loadVector=[0.0, 0.0, 0.0]))
-    pulse = CreateSymbolicUserFunction(mbs, _pulse, "loadVectorUserFunction", load)  # alive through the solve
-    mbs.SetLoadParameter(load, "loadVectorUserFunction", pulse)
+    pulse = exudyn_pulse(mbs, nodes[-1], FORCE)  # alive through the solve
     sensor = mbs.AddSensor(SensorNode(nodeNumber=nodes[-1], outputVariableType=exu.OutputVariableType.Position,
                                       storeInternal=True, writeToFile=False))
     mbs.Assemble()
@@ -111,44 +115,28 @@ def exudyn_beam_2d(n, h):
 
 
 def frequency_error(r, exact=EXACT[0]):
-    """f1's relative error against `exact` (Euler-Bernoulli's here): CSV
-    columns and log text."""
-    error = abs(r["f1"] / exact - 1)
-    return dict(error=error, f1_hz=r["f1"]), f"f1 {r['f1']:.7f} Hz (relative error {error:8.2e})"
+    """f1's relative error against `exact` (Euler-Bernoulli's here)."""
+    return dict(error=abs(r["f1"] / exact - 1), f1_hz=r["f1"])
 
 
-def run_study(args):
-    """Runs every code of the study; its rows."""
-    factory = SceneFactory()
-    try:
-        fmus = {n: factory.fmu(vibration_scene(n), f"vibration{n}") for n, _ in GRID}
-        rows = grid_study("F3", ((OURS, "3D corotational beam, consistent mass, shallow-arch strain",
-                                  lambda n, h: ours(fmus[n], n, h)),
-                                 (EXUDYN, "BeamGeometricallyExact2D", exudyn_beam_2d)),
-                          GRID, args.repeats, frequency_error)
-    finally:
-        factory.close()
-    return rows
+class Study(PeerStudy):
+    label, name, repeats = "F3", "f3_vibration", 2
+    settings, xlabel = GRID, "wall time for 10 s simulated [s]"
+    annotate = staticmethod(mesh_and_step)
 
+    def codes(self):
+        fmus = {n: self.pack(vibration_scene(n), f"vibration{n}") for n, _ in self.settings}
+        return [(OURS, "3D corotational beam, consistent mass, shallow-arch strain",
+                 lambda n, h: ours(fmus[n], f"beam.node{n}.position.y", h)),
+                (EXUDYN, "BeamGeometricallyExact2D", exudyn_beam_2d)]
 
-def main():
-    args = study_arguments(__doc__, repeats=2)
-    csv_path = args.out / "f3_vibration_precision.csv"
-    if args.replot:
-        rows = read_csv(csv_path)
-    else:
-        rows = run_study(args)
-        write_csv(csv_path, rows)
+    def measure(self, r, code):
+        return frequency_error(r)
 
-    fig, ax = figure()
-    plot_precision_work(ax, rows, annotate=mesh_and_step)
-    ax.set_xlabel("wall time for 10 s simulated [s]")
-    ax.set_ylabel("relative error of the first bending frequency")
-    ax.set_title(f"F3 cantilever: f1 against Euler-Bernoulli {EXACT[0]:.6f} Hz (labels: elements / substep)",
-                 fontsize=9)
-    png = args.out / "f3_vibration_precision.png"
-    save_figure(fig, png)
+    def panels(self, tables):
+        return [Panel("relative error of the first bending frequency",
+                      f"F3 cantilever: f1 against Euler-Bernoulli {EXACT[0]:.6f} Hz (labels: elements / substep)")]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

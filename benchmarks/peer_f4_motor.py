@@ -33,10 +33,10 @@ Writes f4_motor_precision.csv, f4_motor_reference.csv and f4_motor_precision.png
 
 import numpy as np
 
-from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, exudyn_beam_line_2d, exudyn_settings, exudyn_solve, \
-    extrapolated_reference, figure, grid_study, load_scene, mesh_and_step, plot_precision_work, read_csv, \
-    refinement_grid, save_figure, study_arguments, write_csv
-from peer_f4_spin_up import EA, EI, GA, L, RHO_A, RHO_I, RHO_INF, _hub_offset, _hub_rate, extrapolated, hub_angle
+from peer_common import EXUDYN, OURS, FmuRun, Panel, PeerStudy, exudyn_beam_line_2d, exudyn_settings, exudyn_solve, \
+    exudyn_spin_up_drive, extrapolated_references, extrapolated_value, load_scene, mesh_and_step, read_csv, \
+    refinement_grid
+from peer_f4_spin_up import EA, EI, GA, L, OMEGA, RHO_A, RHO_I, RHO_INF, T_UP, hub_angle
 
 HUB_MASS, HUB_INERTIA = 10.0, 2.0
 PAIRS = [(2, 8e-3), (4, 4e-3), (8, 2e-3), (16, 1e-3), (32, 5e-4)]
@@ -74,7 +74,6 @@ def ours(fmu, n, h):
 
 def exudyn_motor_2d(n, h):
     import exudyn as exu
-    from exudyn.advancedUtilities import CreateSymbolicUserFunction
     from exudyn.itemInterface import MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, \
         NodePointGround, NodeRigidBody2D, ObjectConnectorCoordinate, ObjectGround, ObjectJointRevolute2D, \
         ObjectRigidBody2D, SensorNode
@@ -92,10 +91,7 @@ def exudyn_motor_2d(n, h):
     drive = mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
         mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0)),
         mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=hub_node, coordinate=2))]))
-    offset = CreateSymbolicUserFunction(mbs, _hub_offset, "offsetUserFunction", drive)  # alive through the solve
-    rate = CreateSymbolicUserFunction(mbs, _hub_rate, "offsetUserFunction_t", drive)
-    mbs.SetObjectParameter(drive, "offsetUserFunction", offset)
-    mbs.SetObjectParameter(drive, "offsetUserFunction_t", rate)
+    functions = exudyn_spin_up_drive(mbs, drive, OMEGA, T_UP)  # alive through the solve
     # Fixed joint hub - root node: positions and rotations equal.
     mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
         mbs.AddMarker(MarkerBodyPosition(bodyNumber=hub, localPosition=[0.0, 0.0, 0.0])),
@@ -113,68 +109,43 @@ def exudyn_motor_2d(n, h):
     return dict(wall_time_s=wall, tip=tip_deflection(STOP, data[-1, 1:3]), **statistics)
 
 
-def tip_error(r, reference):
-    """The tip deflection's error at 7 s: CSV columns and log text."""
-    error = abs(r["tip"] - reference)
-    return dict(error=error, tip_deflection_7s_m=r["tip"]), f"tip at 7 s {r['tip']:.6f} m (error {error:8.2e})"
+class Study(PeerStudy):
+    label, name, repeats = "F4 motor", "f4_motor", 2
+    settings, xlabel = GRID, "wall time for 7 s simulated [s]"
+    annotate = staticmethod(mesh_and_step)
+    tables = ("precision", "reference")
 
+    def codes(self):
+        return [(OURS, "hub on driven revolute, fixed joint to 3D corotational beam",
+                 lambda n, h: ours(self.fmus[n], n, h)),
+                (EXUDYN, "RigidBody2D hub, Revolute2D + coordinate drive, weld to BeamGeometricallyExact2D",
+                 exudyn_motor_2d)]
 
-def main():
-    args = study_arguments(__doc__, repeats=2)
-    png = args.out / "f4_motor_precision.png"
-    if args.replot:
-        return plot(read_csv(args.out / "f4_motor_precision.csv"),
-                    extrapolated_reference(args.out / "f4_motor_reference.csv"), png)
-
-    factory = SceneFactory()
-    try:
-        fmus = {n: factory.fmu(motor_scene(n), f"motor{n}") for n, _ in GRID + REFERENCE}
-        runs = {OURS: lambda n, h: ours(fmus[n], n, h), EXUDYN: exudyn_motor_2d}
-        reference_rows, extrapolations = [], {}
-        for code, run in runs.items():
-            tips = []
-            for n, h in REFERENCE:
-                r = run(n, h)
-                tips.append(r["tip"])
-                reference_rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"], error="",
-                                           h_s=h, tip_deflection_7s_m=r["tip"], kind="run"))
-                print(f"F4 motor reference {code:9s} n={n:4d} h={h:7.1e}  tip at 7 s {r['tip']:.9f} m  "
-                      f"wall {r['wall_time_s']:.2f} s", flush=True)
-            extrapolations[code] = extrapolated(*tips)
-            reference_rows.append(dict(code=code, h_or_elements="extrapolated", wall_time_s="", error="",
-                                       h_s=REFERENCE[-1][1], tip_deflection_7s_m=extrapolations[code],
-                                       kind="Richardson in n, order 2"))
-        reference = extrapolations[OURS]
-        print(f"F4 motor reference tip deflection at 7 s: ours {reference:.9f} m, Exudyn "
-              f"{extrapolations[EXUDYN]:.9f} m (difference {abs(reference - extrapolations[EXUDYN]):.1e} m)")
-        spin_up = args.out / "f4_spin_up_reference.csv"
+    def run(self):
+        self.fmus = {n: self.pack(motor_scene(n), f"motor{n}") for n, _ in self.settings + REFERENCE}
+        runs = [(code, run) for code, _, run in self.codes()]
+        reference, values = extrapolated_references("F4 motor", runs, REFERENCE, "tip", "tip_deflection_7s_m")
+        self.reference = values[OURS]
+        print(f"F4 motor reference tip deflection at 7 s: ours {values[OURS]:.9f} m, Exudyn {values[EXUDYN]:.9f} m "
+              f"(difference {abs(values[OURS] - values[EXUDYN]):.1e} m)")
+        spin_up = self.args.out / "f4_spin_up_reference.csv"
         if spin_up.exists():  # the prescribed-root-node version (peer_f4_spin_up.py)
             for r in read_csv(spin_up):
                 if r["h_or_elements"] == "extrapolated":
-                    reference_rows.append(dict(r, code=r["code"], kind=r["kind"] + ", prescribed root node "
-                                               "(f4_spin_up_reference.csv)"))
+                    reference.append(dict(r, kind=r["kind"] + ", prescribed root node (f4_spin_up_reference.csv)"))
                     print(f"  prescribed root node, {r['code']}: {float(r['tip_deflection_7s_m']):.9f} m")
+        return dict(super().run(), reference=reference)
 
-        models = {OURS: "hub on driven revolute, fixed joint to 3D corotational beam",
-                  EXUDYN: "RigidBody2D hub, Revolute2D + coordinate drive, weld to BeamGeometricallyExact2D"}
-        rows = grid_study("F4 motor", [(code, models[code], run) for code, run in runs.items()], GRID, args.repeats,
-                          lambda r: tip_error(r, reference))
-    finally:
-        factory.close()
-    write_csv(args.out / "f4_motor_precision.csv", rows)
-    write_csv(args.out / "f4_motor_reference.csv", reference_rows)
-    plot(rows, reference, png)
+    def measure(self, r, code):
+        """The tip deflection's error at 7 s."""
+        return dict(error=abs(r["tip"] - self.reference), tip_deflection_7s_m=r["tip"])
 
-
-def plot(rows, reference, png):
-    fig, ax = figure(figsize=(6.4, 4.8))
-    plot_precision_work(ax, rows, annotate=mesh_and_step)
-    ax.set_ylabel("tip deflection error at t = 7 s [m]")
-    ax.set_xlabel("wall time for 7 s simulated [s]")
-    ax.set_title(f"F4 motor-driven hub: tip deflection at 7 s vs converged {reference:.6f} m\n"
-                 "(labels: elements / substep)", fontsize=9)
-    save_figure(fig, png)
+    def panels(self, tables):
+        reference = extrapolated_value(tables["reference"], "tip_deflection_7s_m")
+        return [Panel("tip deflection error at t = 7 s [m]",
+                      f"F4 motor-driven hub: tip deflection at 7 s vs converged {reference:.6f} m\n"
+                      "(labels: elements / substep)")]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

@@ -32,9 +32,9 @@ Writes f4_spin_up_precision.csv, f4_spin_up_reference.csv and f4_spin_up_precisi
 
 import numpy as np
 
-from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
-    exudyn_settings, exudyn_solve, extrapolated_reference, figure, grid_study, load_scene, mesh_and_step, \
-    plot_precision_work, read_csv, refinement_grid, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, Panel, PeerStudy, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
+    exudyn_settings, exudyn_solve, exudyn_spin_up_drive, extrapolated_references, extrapolated_value, load_scene, \
+    mesh_and_step, refinement_grid, spin_up_angle
 
 L, EA, GA, EI, RHO_A, RHO_I = 10.0, 2.8e7, 1e7, 1.4e4, 1.2, 6e-4
 T_UP, OMEGA = 15.0, 6.0
@@ -52,9 +52,7 @@ RHO_INF = 0.8
 
 
 def hub_angle(t):
-    t = np.asarray(t, dtype=float)
-    ramp = OMEGA / T_UP * (t**2 / 2 + (T_UP / (2 * np.pi))**2 * (np.cos(2 * np.pi * t / T_UP) - 1))
-    return np.where(t <= T_UP, ramp, OMEGA * T_UP / 2 + OMEGA * (t - T_UP))
+    return spin_up_angle(np.asarray(t, dtype=float), OMEGA, T_UP)
 
 
 def measures(t, nodes):
@@ -88,34 +86,14 @@ def ours(fmu, n, h, stop):
     return dict(wall_time_s=wall, tip=tip, elongation=elongation, **statistics)
 
 
-def _hub_offset(mbs, t, itemNumber, lOffset):
-    """theta(t) as an Exudyn symbolic expression (recorded once, evaluated in C++)."""
-    import exudyn as exu
-    sym = exu.symbolic
-    ramp = OMEGA / T_UP * (t * t / 2 + (T_UP / (2 * np.pi))**2 * (sym.cos(2 * np.pi / T_UP * t) - 1))
-    return sym.IfThenElse(t <= T_UP, ramp, OMEGA * T_UP / 2 + OMEGA * (t - T_UP))
-
-
-def _hub_rate(mbs, t, itemNumber, lOffset):
-    import exudyn as exu
-    sym = exu.symbolic
-    ramp = OMEGA / T_UP * (t - T_UP / (2 * np.pi) * sym.sin(2 * np.pi / T_UP * t))
-    return sym.IfThenElse(t <= T_UP, ramp, sym.Real(OMEGA))
-
-
 def exudyn_beam_2d(n, h, stop):
     import exudyn as exu
-    from exudyn.advancedUtilities import CreateSymbolicUserFunction
     from exudyn.itemInterface import SensorNode
 
     mbs = exu.SystemContainer().AddSystem()
     nodes = exudyn_beam_line_2d(mbs, n, L, RHO_A, RHO_I, EI, EA, GA)
     root = exudyn_clamp_coordinates(mbs, nodes[0], 3)
-    # The symbolic functions must outlive the solve: keep them in this frame.
-    offset = CreateSymbolicUserFunction(mbs, _hub_offset, "offsetUserFunction", root[2])
-    rate = CreateSymbolicUserFunction(mbs, _hub_rate, "offsetUserFunction_t", root[2])
-    mbs.SetObjectParameter(root[2], "offsetUserFunction", offset)
-    mbs.SetObjectParameter(root[2], "offsetUserFunction_t", rate)
+    drive = exudyn_spin_up_drive(mbs, root[2], OMEGA, T_UP)  # alive through the solve
     sensors = [mbs.AddSensor(SensorNode(nodeNumber=node, outputVariableType=exu.OutputVariableType.Position,
                                         storeInternal=True, writeToFile=False)) for node in nodes]
     mbs.Assemble()
@@ -127,72 +105,40 @@ def exudyn_beam_2d(n, h, stop):
     return dict(wall_time_s=wall, tip=tip, elongation=elongation, **statistics)
 
 
-def extrapolated(coarse, fine):
-    """Richardson extrapolation for order 2 in the element size (n doubled)."""
-    return fine + (fine - coarse) / 3.0
+class Study(PeerStudy):
+    label, name, repeats = "F4", "f4_spin_up", 2
+    settings, xlabel = GRID, "wall time for 20 s simulated [s]"
+    annotate = staticmethod(mesh_and_step)
+    tables = ("precision", "reference")
 
+    def runs(self, stop):
+        return [(OURS, lambda n, h: ours(self.fmus[n], n, h, stop)), (EXUDYN, lambda n, h: exudyn_beam_2d(n, h, stop))]
 
-def errors(r, reference):
-    """Tip deflection and steady elongation errors: CSV columns and log text."""
-    tip, elongation = abs(r["tip"] - reference), abs(r["elongation"] - ELONGATION)
-    return (dict(error=tip, elongation_error=elongation,
-                 elongation_error_vs_linear=abs(r["elongation"] - ELONGATION_LINEAR), tip_deflection_7s_m=r["tip"],
-                 elongation_m=r["elongation"]),
-            f"tip at 7 s {r['tip']:.6f} m (error {tip:8.2e})  elongation {r['elongation']:.6e} m "
-            f"(error {elongation:8.2e})")
+    def codes(self):
+        models = {OURS: "3D corotational beam, consistent mass, shallow-arch strain", EXUDYN: "BeamGeometricallyExact2D"}
+        return [(code, models[code], run) for code, run in self.runs(STOP)]
 
+    def run(self):
+        self.fmus = {n: self.pack(spin_up_scene(n), f"spin{n}") for n, _ in self.settings + REFERENCE}
+        reference, values = extrapolated_references("F4", self.runs(T_TIP), REFERENCE, "tip", "tip_deflection_7s_m")
+        self.reference = values[OURS]
+        print(f"F4 reference tip deflection at 7 s: ours {values[OURS]:.9f} m, Exudyn {values[EXUDYN]:.9f} m",
+              flush=True)
+        return dict(super().run(), reference=reference)
 
-def main():
-    args = study_arguments(__doc__, repeats=2)
-    png = args.out / "f4_spin_up_precision.png"
-    if args.replot:
-        return plot(read_csv(args.out / "f4_spin_up_precision.csv"),
-                    extrapolated_reference(args.out / "f4_spin_up_reference.csv"), png)
+    def measure(self, r, code):
+        """Tip deflection and steady elongation errors."""
+        return dict(error=abs(r["tip"] - self.reference), elongation_error=abs(r["elongation"] - ELONGATION),
+                    elongation_error_vs_linear=abs(r["elongation"] - ELONGATION_LINEAR), tip_deflection_7s_m=r["tip"],
+                    elongation_m=r["elongation"])
 
-    factory = SceneFactory()
-    try:
-        fmus = {n: factory.fmu(spin_up_scene(n), f"spin{n}") for n, _ in GRID + REFERENCE}
-        reference_rows = []
-        for code, run in ((OURS, lambda n, h: ours(fmus[n], n, h, T_TIP)),
-                          (EXUDYN, lambda n, h: exudyn_beam_2d(n, h, T_TIP))):
-            tips = []
-            for n, h in REFERENCE:
-                r = run(n, h)
-                tips.append(r["tip"])
-                reference_rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"], error="",
-                                           h_s=h, tip_deflection_7s_m=r["tip"], kind="run"))
-                print(f"F4 reference {code:9s} n={n:4d} h={h:7.1e}  tip at 7 s {r['tip']:.9f} m  "
-                      f"wall {r['wall_time_s']:.2f} s", flush=True)
-            reference_rows.append(dict(code=code, h_or_elements="extrapolated", wall_time_s="", error="",
-                                       h_s=REFERENCE[-1][1], tip_deflection_7s_m=extrapolated(*tips),
-                                       kind="Richardson in n, order 2"))
-        reference = reference_rows[2]["tip_deflection_7s_m"]  # ours, extrapolated
-        print(f"F4 reference tip deflection at 7 s: ours {reference:.9f} m, Exudyn "
-              f"{reference_rows[-1]['tip_deflection_7s_m']:.9f} m", flush=True)
-
-        rows = grid_study("F4", ((OURS, "3D corotational beam, consistent mass, shallow-arch strain",
-                                  lambda n, h: ours(fmus[n], n, h, STOP)),
-                                 (EXUDYN, "BeamGeometricallyExact2D", lambda n, h: exudyn_beam_2d(n, h, STOP))),
-                          GRID, args.repeats, lambda r: errors(r, reference))
-    finally:
-        factory.close()
-    write_csv(args.out / "f4_spin_up_precision.csv", rows)
-    write_csv(args.out / "f4_spin_up_reference.csv", reference_rows)
-    plot(rows, reference, png)
-
-
-def plot(rows, reference, png):
-    fig, (a, b) = figure(2, (12, 4.8))
-    plot_precision_work(a, rows, annotate=mesh_and_step)
-    a.set_ylabel("tip deflection error at t = 7 s [m]")
-    a.set_title(f"F4 spin-up: tip deflection (rotating frame) at 7 s vs converged {reference:.6f} m", fontsize=9)
-    plot_precision_work(b, rows, error_key="elongation_error", annotate=mesh_and_step)
-    b.set_ylabel("|mean elongation over 17-20 s - tan(kL)/k + L| [m]")
-    b.set_title(f"F4 steady elongation vs {ELONGATION:.6e} m (labels: elements / substep)", fontsize=9)
-    for ax in (a, b):
-        ax.set_xlabel("wall time for 20 s simulated [s]")
-    save_figure(fig, png)
+    def panels(self, tables):
+        reference = extrapolated_value(tables["reference"], "tip_deflection_7s_m")
+        return [Panel("tip deflection error at t = 7 s [m]",
+                      f"F4 spin-up: tip deflection (rotating frame) at 7 s vs converged {reference:.6f} m"),
+                Panel("|mean elongation over 17-20 s - tan(kL)/k + L| [m]",
+                      f"F4 steady elongation vs {ELONGATION:.6e} m (labels: elements / substep)", "elongation_error")]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

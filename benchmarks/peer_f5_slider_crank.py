@@ -39,8 +39,8 @@ f5_slider_crank_precision.png (error against wall time; the curves).
 
 import numpy as np
 
-from peer_common import EXUDYN, FmuRun, OURS, SceneFactory, best_of, exudyn_beam_line_2d, exudyn_settings, \
-    exudyn_solve, figure, load_scene, plot_precision_work, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, Panel, PeerStudy, draw_curves, exudyn_beam_line_2d, exudyn_settings, \
+    exudyn_solve, exudyn_spin_up_drive, figure, load_scene, save_figure, sweep
 
 CRANK, ROD, OMEGA, T_UP = 0.15, 0.30, 150.0, 0.15
 E, NU, RHO, D = 2e11, 0.3, 7870.0, 0.006
@@ -80,23 +80,8 @@ def ours(fmu, n, h):
     return dict(wall_time_s=wall, deflection=midspan_deflection(p[:, 0], p[:, 1], p[:, 2]), **statistics)
 
 
-def _crank_angle(mbs, t, itemNumber, lOffset):
-    import exudyn as exu
-    sym = exu.symbolic
-    ramp = OMEGA / T_UP * (t * t / 2 + (T_UP / (2 * np.pi))**2 * (sym.cos(2 * np.pi / T_UP * t) - 1))
-    return sym.IfThenElse(t <= T_UP, ramp, OMEGA * T_UP / 2 + OMEGA * (t - T_UP))
-
-
-def _crank_rate(mbs, t, itemNumber, lOffset):
-    import exudyn as exu
-    sym = exu.symbolic
-    ramp = OMEGA / T_UP * (t - T_UP / (2 * np.pi) * sym.sin(2 * np.pi / T_UP * t))
-    return sym.IfThenElse(t <= T_UP, ramp, sym.Real(OMEGA))
-
-
 def exudyn_slider_crank_2d(n, h):
     import exudyn as exu
-    from exudyn.advancedUtilities import CreateSymbolicUserFunction
     from exudyn.itemInterface import MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, \
         NodePointGround, NodeRigidBody2D, ObjectConnectorCoordinate, ObjectGround, ObjectJointRevolute2D, \
         ObjectRigidBody2D, SensorNode
@@ -113,10 +98,7 @@ def exudyn_slider_crank_2d(n, h):
         mbs.AddMarker(MarkerBodyPosition(bodyNumber=crank, localPosition=[-CRANK / 2, 0.0, 0.0]))]))
     drive = mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
         fixed, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=crank_node, coordinate=2))]))
-    angle = CreateSymbolicUserFunction(mbs, _crank_angle, "offsetUserFunction", drive)  # alive through the solve
-    rate = CreateSymbolicUserFunction(mbs, _crank_rate, "offsetUserFunction_t", drive)
-    mbs.SetObjectParameter(drive, "offsetUserFunction", angle)
-    mbs.SetObjectParameter(drive, "offsetUserFunction_t", rate)
+    functions = exudyn_spin_up_drive(mbs, drive, OMEGA, T_UP)  # alive through the solve
     mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[
         mbs.AddMarker(MarkerBodyPosition(bodyNumber=crank, localPosition=[CRANK / 2, 0.0, 0.0])),
         mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[0]))]))
@@ -134,71 +116,60 @@ def exudyn_slider_crank_2d(n, h):
     return dict(wall_time_s=wall, deflection=midspan_deflection(*(d[keep, 1:3] for d in data)), **statistics)
 
 
-def main():
-    args = study_arguments(__doc__, repeats=2)
+class Study(PeerStudy):
+    label, name, repeats = "F5", "f5_slider_crank", 2
+    settings, xlabel = PAIRS, "wall time for 0.4 s simulated [s]"
+    tables, curves = ("precision", "reference"), True
 
-    factory = SceneFactory()
-    try:
-        fmus = {n: factory.fmu(slider_crank_scene(n), f"crank{n}") for n, _ in PAIRS + [REFERENCE]}
-        runs = {OURS: lambda n, h: ours(fmus[n], n, h), EXUDYN: exudyn_slider_crank_2d}
-        models = {OURS: "crank on driven revolute, massless slider, 3D corotational rod",
-                  EXUDYN: "RigidBody2D crank, coordinate drive, BeamGeometricallyExact2D rod"}
-        reference, reference_rows = {}, []
-        for code, run in runs.items():
+    def codes(self):
+        return [(OURS, "crank on driven revolute, massless slider, 3D corotational rod",
+                 lambda n, h: ours(self.fmus[n], n, h)),
+                (EXUDYN, "RigidBody2D crank, coordinate drive, BeamGeometricallyExact2D rod", exudyn_slider_crank_2d)]
+
+    def run(self):
+        """Each code's converged curve first (REFERENCE), then the sweep
+        against it; the runs' curves are kept for the figure."""
+        self.fmus = {n: self.pack(slider_crank_scene(n), f"crank{n}") for n, _ in self.settings + [REFERENCE]}
+        self.reference, reference_rows = {}, []
+        for code, _, run in self.codes():
             r = run(*REFERENCE)
-            reference[code] = r["deflection"]
+            self.reference[code] = r["deflection"]
             reference_rows.append(dict(code=code, h_or_elements=REFERENCE[0], wall_time_s=r["wall_time_s"],
                                        error="", h_s=REFERENCE[1],
                                        max_abs_deflection_m=float(np.abs(r["deflection"]).max())))
             print(f"F5 reference {code:9s} n={REFERENCE[0]} h={REFERENCE[1]:.1e}: largest |deflection| "
                   f"{np.abs(r['deflection']).max():.6e} m, wall {r['wall_time_s']:.2f} s", flush=True)
-        agreement = float(np.abs(reference[OURS] - reference[EXUDYN]).max())
+        self.agreement = float(np.abs(self.reference[OURS] - self.reference[EXUDYN]).max())
         for row in reference_rows:
-            row["max_abs_difference_between_codes_m"] = agreement
-        print(f"F5 converged curves, ours against Exudyn: max |difference| {agreement:.3e} m "
-              f"({agreement / np.abs(reference[OURS]).max():.2e} of the largest deflection)", flush=True)
+            row["max_abs_difference_between_codes_m"] = self.agreement
+        print(f"F5 converged curves, ours against Exudyn: max |difference| {self.agreement:.3e} m "
+              f"({self.agreement / np.abs(self.reference[OURS]).max():.2e} of the largest deflection)", flush=True)
+        self.results = {}
+        rows = sweep(self.label, self.codes(), self.settings, self.args.repeats, self.measure, self.results)
+        return dict(precision=rows, reference=reference_rows)
 
-        rows, curves = [], {}
-        other = {OURS: EXUDYN, EXUDYN: OURS}
-        for code, run in runs.items():
-            for n, h in PAIRS:
-                r = best_of(lambda: run(n, h), args.repeats)
-                curves[(code, n)] = r["deflection"]
-                rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"],
-                                 error=float(np.abs(r["deflection"] - reference[code]).max()), model=models[code],
-                                 h_s=h,
-                                 error_vs_other_reference=float(np.abs(r["deflection"] - reference[other[code]]).max()),
-                                 max_abs_deflection_m=float(np.abs(r["deflection"]).max()), steps=r["steps"],
-                                 newton_iterations=r["newton_iterations"],
-                                 factorizations=r.get("factorizations", ""),
-                                 rejected_steps=r.get("rejected_steps", "")))
-                print(f"F5 {code:9s} n={n:4d} h={h:7.1e}  wall {r['wall_time_s']:7.3f} s  max |d - d_ref| "
-                      f"{rows[-1]['error']:8.2e} m  Newton it/step {r['newton_iterations'] / r['steps']:.2f}",
-                      flush=True)
-    finally:
-        factory.close()
-    write_csv(args.out / "f5_slider_crank_precision.csv", rows)
-    write_csv(args.out / "f5_slider_crank_reference.csv", reference_rows)
+    def measure(self, r, code):
+        other = EXUDYN if code == OURS else OURS
+        return dict(error=float(np.abs(r["deflection"] - self.reference[code]).max()),
+                    error_vs_other_reference=float(np.abs(r["deflection"] - self.reference[other]).max()),
+                    max_abs_deflection_m=float(np.abs(r["deflection"]).max()))
 
-    fig, (a, b) = figure(2, (12, 4.8))
-    plot_precision_work(a, rows)
-    a.set_xlabel("wall time for 0.4 s simulated [s]")
-    a.set_ylabel("max |d(t) - d_ref(t)| over 0..0.4 s [m]")
-    a.set_title(f"F5 slider-crank: mid-span deflection vs converged run of the same code\n"
-                f"(n = {REFERENCE[0]}, h = {REFERENCE[1]:g}; labels: elements, h = 1e-3/n)", fontsize=9)
-    t = OUTPUT * np.arange(1, len(reference[OURS]) + 1)
-    b.plot(t, 1e3 * reference[OURS], "C0-", lw=1.5, label=f"{OURS}, n = {REFERENCE[0]}")
-    b.plot(t, 1e3 * reference[EXUDYN], "C3--", lw=1.5, label=f"{EXUDYN}, n = {REFERENCE[0]}")
-    b.plot(t, 1e3 * curves[(OURS, PAIRS[1][0])], "C9:", lw=1, label=f"{OURS}, n = {PAIRS[1][0]}")
-    b.plot(t, 1e3 * curves[(EXUDYN, PAIRS[1][0])], "C1:", lw=1, label=f"{EXUDYN}, n = {PAIRS[1][0]}")
-    b.set_xlabel("t [s]")
-    b.set_ylabel("mid-span deflection [mm]")
-    b.set_title(f"converged curves differ by at most {agreement:.2e} m", fontsize=9)
-    b.grid(True, alpha=0.3)
-    b.legend(fontsize=7)
-    png = args.out / "f5_slider_crank_precision.png"
-    save_figure(fig, png)
+    def draw(self, tables, png):
+        fig, (a, b) = figure(2, (12, 4.8))
+        self.draw_panel(a, tables["precision"], Panel(
+            "max |d(t) - d_ref(t)| over 0..0.4 s [m]",
+            f"F5 slider-crank: mid-span deflection vs converged run of the same code\n"
+            f"(n = {REFERENCE[0]}, h = {REFERENCE[1]:g}; labels: elements, h = 1e-3/n)"))
+        t = OUTPUT * np.arange(1, len(self.reference[OURS]) + 1)
+        coarse = self.settings[1]
+        draw_curves(b, t, [(1e3 * self.reference[OURS], "C0-", 1.5, f"{OURS}, n = {REFERENCE[0]}"),
+                           (1e3 * self.reference[EXUDYN], "C3--", 1.5, f"{EXUDYN}, n = {REFERENCE[0]}"),
+                           (1e3 * self.results[(OURS, coarse)]["deflection"], "C9:", 1, f"{OURS}, n = {coarse[0]}"),
+                           (1e3 * self.results[(EXUDYN, coarse)]["deflection"], "C1:", 1,
+                            f"{EXUDYN}, n = {coarse[0]}")],
+                    "mid-span deflection [mm]", f"converged curves differ by at most {self.agreement:.2e} m")
+        save_figure(fig, png)
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

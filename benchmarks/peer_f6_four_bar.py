@@ -59,16 +59,16 @@ f6_four_bar_precision.png.
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
-    load_scene, plot_precision_work, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, OURS, FmuRun, Panel, PeerStudy, draw_curves, exudyn_settings, exudyn_solve, \
+    extrapolated, figure, load_scene, save_figure, spin_up_angle, sweep
 
 OMEGA, T_UP, DEFECT, BETA = 0.6, 1.0, np.radians(5.0), 3e-5
 STOP = 2 * np.pi / OMEGA + T_UP / 2  # one revolution of bar 1
 SAMPLES = 200
 OUTPUT = STOP / SAMPLES
-# (elements per bar, substeps per output interval): h = OUTPUT/k
-PAIRS = [(2, 13), (4, 13), (8, 13), (16, 13)]
-REFERENCE = (32, 13)
+H = OUTPUT / 13  # 13 substeps per output interval
+PAIRS = [(2, H), (4, H), (8, H), (16, H)]  # (elements per bar, substep)
+REFERENCE = (32, H)
 WINDOW = 0.6  # rad about the flat configurations left out of the error
 RHO_INF = 0.8
 RAMP = "if(T - t, omega/T*(t^2/2 + (T/(2*pi))^2*(cos(2*pi*t/T) - 1)), omega*T/2 + omega*(t - T))"
@@ -80,9 +80,7 @@ BARS = [([0, 0, 0], [0, 0, 0.12], 5.2992e7, 1.68803e7, 733.488, 1130.50, 1.9968,
 
 
 def drive_angle(t):
-    t = np.asarray(t, dtype=float)
-    ramp = OMEGA / T_UP * (t**2 / 2 + (T_UP / (2 * np.pi))**2 * (np.cos(2 * np.pi * t / T_UP) - 1))
-    return np.where(t <= T_UP, ramp, OMEGA * T_UP / 2 + OMEGA * (t - T_UP))
+    return spin_up_angle(np.asarray(t, dtype=float), OMEGA, T_UP)
 
 
 def quasi_static_samples():
@@ -90,11 +88,6 @@ def quasi_static_samples():
     the flat configurations pi/2 and 3 pi/2."""
     angle = drive_angle(OUTPUT * np.arange(1, SAMPLES + 1))
     return (np.abs(angle - np.pi / 2) > WINDOW) & (np.abs(angle - 3 * np.pi / 2) > WINDOW)
-
-
-def extrapolated(coarse, fine):
-    """Richardson extrapolation for order 2 in the element size (n doubled)."""
-    return fine + (fine - coarse) / 3.0
 
 
 def four_bar_scene(n):
@@ -116,8 +109,8 @@ def four_bar_scene(n):
     return scene
 
 
-def ours(fmu, k):
-    run = FmuRun(fmu, {"solver.h_max": OUTPUT / k * (1 + 1e-9)})
+def ours(fmu, h):
+    run = FmuRun(fmu, {"solver.h_max": h * (1 + 1e-9)})
     s, wall, statistics = run.sample(["A.drive_torque", "bar3.node0.position.y", "A.angle"], SAMPLES * OUTPUT, OUTPUT)
     s = s[1:]  # from t = OUTPUT on
     assert abs(s[-1, 2] - 2 * np.pi) < 1e-9, s[-1, 2]
@@ -126,9 +119,7 @@ def ours(fmu, k):
 
 def _drive_offset(mbs, t, itemNumber, lOffset):
     import exudyn as exu
-    sym = exu.symbolic
-    ramp = OMEGA / T_UP * (t * t / 2 + (T_UP / (2 * np.pi))**2 * (sym.cos(2 * np.pi / T_UP * t) - 1))
-    return [0, 0, 0, 0, 0, sym.IfThenElse(t <= T_UP, ramp, OMEGA * T_UP / 2 + OMEGA * (t - T_UP))]
+    return [0, 0, 0, 0, 0, spin_up_angle(t, OMEGA, T_UP, exu.symbolic.cos, exu.symbolic.IfThenElse)]
 
 
 def _beam_frame(start, end):
@@ -146,7 +137,7 @@ def _axis_frame(axis):
     return np.column_stack([x, np.cross(z, x), z])
 
 
-def exudyn_four_bar(n, k):
+def exudyn_four_bar(n, h):
     import exudyn as exu
     from exudyn.advancedUtilities import CreateSymbolicUserFunction
     from exudyn.itemInterface import MarkerBodyRigid, MarkerNodeRigid, NodeRigidBodyEP, ObjectBeamGeometricallyExact, \
@@ -197,8 +188,8 @@ def exudyn_four_bar(n, k):
     joint_c = mbs.AddSensor(SensorNode(nodeNumber=n3[0], outputVariableType=exu.OutputVariableType.Position,
                                        storeInternal=True, writeToFile=False))
     mbs.Assemble()
-    settings = exudyn_settings(end_time=STOP, h=OUTPUT / k, rho_inf=RHO_INF, sensor_period=OUTPUT, sparse=True)
-    settings.timeIntegration.numberOfSteps = SAMPLES * k
+    settings = exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF, sensor_period=OUTPUT, sparse=True)
+    settings.timeIntegration.numberOfSteps = SAMPLES * round(OUTPUT / h)
     wall, statistics = exudyn_solve(mbs, settings)
     data, c = mbs.GetSensorStoredData(torque), mbs.GetSensorStoredData(joint_c)
     keep = data[:, 0] > 0.5 * OUTPUT  # the sensors also store t = 0
@@ -207,77 +198,65 @@ def exudyn_four_bar(n, k):
     return dict(wall_time_s=wall, torque=data[keep, 3], out_of_plane=float(np.abs(c[keep, 2]).max()), **statistics)
 
 
-def main():
-    args = study_arguments(__doc__, repeats=1)
+class Study(PeerStudy):
+    label, name, repeats = "F6", "f6_four_bar", 1
+    settings, xlabel = PAIRS, "wall time for one revolution [s]"
+    tables, curves = ("precision", "reference"), True
 
-    factory = SceneFactory()
-    try:
-        fmus = {n: factory.fmu(four_bar_scene(n), f"four_bar{n}") for n, _ in PAIRS + [REFERENCE]}
-        runs = {OURS: lambda n, k: ours(fmus[n], k), EXUDYN: exudyn_four_bar}
-        models = {OURS: "3D corotational beams, joints on virtual bodies",
-                  EXUDYN: "BeamGeometricallyExact (EP nodes), RevoluteZ + GenericJoint drive"}
-        quasi_static = quasi_static_samples()
-        reference = runs[OURS](*REFERENCE)
-        print(f"F6 reference {OURS} n={REFERENCE[0]} h={OUTPUT / REFERENCE[1]:.2e}: largest |torque| "
-              f"{np.abs(reference['torque']).max():.4f} N m, wall {reference['wall_time_s']:.1f} s", flush=True)
-        rows, curves = [], {}
-        for code, run in runs.items():
-            for n, k in PAIRS:
-                r = best_of(lambda: run(n, k), args.repeats)
-                curves[(code, n)] = r["torque"]
-                deviation = np.abs(r["torque"] - reference["torque"])
-                rows.append(dict(code=code, h_or_elements=n, wall_time_s=r["wall_time_s"],
-                                 error=float(deviation[quasi_static].max()), model=models[code], h_s=OUTPUT / k,
-                                 error_whole_revolution=float(deviation.max()),
-                                 max_abs_torque_nm=float(np.abs(r["torque"]).max()),
-                                 out_of_plane_c_m=r["out_of_plane"],
-                                 out_of_plane_error_m=abs(r["out_of_plane"] - reference["out_of_plane"]),
-                                 steps=r["steps"], newton_iterations=r["newton_iterations"],
-                                 factorizations=r.get("factorizations", ""),
-                                 rejected_steps=r.get("rejected_steps", "")))
-                print(f"F6 {code:9s} n={n:3d} h={OUTPUT / k:8.2e}  wall {r['wall_time_s']:7.2f} s  max |torque - ref| "
-                      f"{rows[-1]['error']:8.2e} N m (whole revolution {deviation.max():.2e})  C out of plane "
-                      f"{r['out_of_plane']:.6e} m  Newton it/step "
-                      f"{r['newton_iterations'] / r['steps']:.2f}", flush=True)
-        finest = {code: curves[(code, PAIRS[-1][0])] for code in runs}
-        exudyn_limit = extrapolated(curves[(EXUDYN, PAIRS[-2][0])], finest[EXUDYN])
-        agreement = float(np.abs(exudyn_limit - reference["torque"])[quasi_static].max())
-        reference_rows = [dict(code=OURS, h_or_elements=REFERENCE[0], wall_time_s=reference["wall_time_s"], error="",
-                               h_s=OUTPUT / REFERENCE[1], max_abs_torque_nm=float(np.abs(reference["torque"]).max()),
-                               out_of_plane_c_m=reference["out_of_plane"], kind="reference run"),
+    def codes(self):
+        return [(OURS, "3D corotational beams, joints on virtual bodies", lambda n, h: ours(self.fmus[n], h)),
+                (EXUDYN, "BeamGeometricallyExact (EP nodes), RevoluteZ + GenericJoint drive", exudyn_four_bar)]
+
+    def run(self):
+        """Our converged curve (REFERENCE), the sweep against it, then
+        Exudyn's two finest runs extrapolated against it."""
+        self.fmus = {n: self.pack(four_bar_scene(n), f"four_bar{n}") for n, _ in self.settings + [REFERENCE]}
+        self.quasi_static = quasi_static_samples()
+        self.reference = ours(self.fmus[REFERENCE[0]], REFERENCE[1])
+        print(f"F6 reference {OURS} n={REFERENCE[0]} h={REFERENCE[1]:.2e}: largest |torque| "
+              f"{np.abs(self.reference['torque']).max():.4f} N m, wall {self.reference['wall_time_s']:.1f} s",
+              flush=True)
+        self.results = {}
+        rows = sweep(self.label, self.codes(), self.settings, self.args.repeats, self.measure, self.results)
+        finer, finest = self.settings[-2:]
+        exudyn_limit = extrapolated(self.results[(EXUDYN, finer)]["torque"], self.results[(EXUDYN, finest)]["torque"])
+        agreement = float(np.abs(exudyn_limit - self.reference["torque"])[self.quasi_static].max())
+        reference_rows = [dict(code=OURS, h_or_elements=REFERENCE[0], wall_time_s=self.reference["wall_time_s"],
+                               error="", h_s=REFERENCE[1],
+                               max_abs_torque_nm=float(np.abs(self.reference["torque"]).max()),
+                               out_of_plane_c_m=self.reference["out_of_plane"], kind="reference run"),
                           dict(code=EXUDYN, h_or_elements="extrapolated", wall_time_s="", error=agreement,
-                               h_s=OUTPUT / PAIRS[-1][1],
-                               kind=f"n = {PAIRS[-2][0]} and {PAIRS[-1][0]} extrapolated (order 2) against ours")]
-        print(f"F6 Exudyn extrapolated from n = {PAIRS[-2][0]}, {PAIRS[-1][0]} against our reference: "
+                               h_s=finest[1], kind=f"n = {finer[0]} and {finest[0]} extrapolated (order 2) against ours")]
+        print(f"F6 Exudyn extrapolated from n = {finer[0]}, {finest[0]} against our reference: "
               f"max |torque difference| {agreement:.3e} N m away from the snaps (largest |torque| there "
-              f"{np.abs(reference['torque'][quasi_static]).max():.3f} N m)", flush=True)
-    finally:
-        factory.close()
-    write_csv(args.out / "f6_four_bar_precision.csv", rows)
-    write_csv(args.out / "f6_four_bar_reference.csv", reference_rows)
+              f"{np.abs(self.reference['torque'][self.quasi_static]).max():.3f} N m)", flush=True)
+        return dict(precision=rows, reference=reference_rows)
 
-    fig, (a, b) = figure(2, (12, 4.8))
-    plot_precision_work(a, rows)
-    a.set_xlabel("wall time for one revolution [s]")
-    a.set_ylabel(f"max |drive torque - reference| [N m], > {WINDOW} rad from the snaps")
-    a.set_title(f"F6 four-bar: drive torque vs ours at n = {REFERENCE[0]}\n"
-                f"(labels: elements per bar; h = {OUTPUT / PAIRS[0][1]:.2g} s in every run)", fontsize=9)
-    t = OUTPUT * np.arange(1, SAMPLES + 1)
-    for flat in (np.pi / 2, 3 * np.pi / 2):
-        inside = t[np.abs(drive_angle(t) - flat) <= WINDOW]
-        b.axvspan(inside[0], inside[-1], color="0.9")
-    b.plot(t, reference["torque"], "C0-", lw=1.5, label=f"{OURS}, n = {REFERENCE[0]} (reference)")
-    b.plot(t, finest[EXUDYN], "C3--", lw=1.2, label=f"{EXUDYN}, n = {PAIRS[-1][0]}")
-    b.plot(t, curves[(OURS, PAIRS[0][0])], "C9:", lw=1, label=f"{OURS}, n = {PAIRS[0][0]}")
-    b.plot(t, curves[(EXUDYN, PAIRS[0][0])], "C1:", lw=1, label=f"{EXUDYN}, n = {PAIRS[0][0]}")
-    b.set_xlabel("t [s]")
-    b.set_ylabel("drive torque at A [N m]")
-    b.set_title("drive torque over one revolution (smooth start, beta = 3e-5 s; grey: snap windows)", fontsize=9)
-    b.grid(True, alpha=0.3)
-    b.legend(fontsize=7)
-    png = args.out / "f6_four_bar_precision.png"
-    save_figure(fig, png)
+    def measure(self, r, code):
+        deviation = np.abs(r["torque"] - self.reference["torque"])
+        return dict(error=float(deviation[self.quasi_static].max()), error_whole_revolution=float(deviation.max()),
+                    max_abs_torque_nm=float(np.abs(r["torque"]).max()), out_of_plane_c_m=r["out_of_plane"],
+                    out_of_plane_error_m=abs(r["out_of_plane"] - self.reference["out_of_plane"]))
+
+    def draw(self, tables, png):
+        fig, (a, b) = figure(2, (12, 4.8))
+        self.draw_panel(a, tables["precision"], Panel(
+            f"max |drive torque - reference| [N m], > {WINDOW} rad from the snaps",
+            f"F6 four-bar: drive torque vs ours at n = {REFERENCE[0]}\n"
+            f"(labels: elements per bar; h = {self.settings[0][1]:.2g} s in every run)"))
+        t = OUTPUT * np.arange(1, SAMPLES + 1)
+        for flat in (np.pi / 2, 3 * np.pi / 2):
+            inside = t[np.abs(drive_angle(t) - flat) <= WINDOW]
+            b.axvspan(inside[0], inside[-1], color="0.9")
+        coarsest, finest = self.settings[0], self.settings[-1]
+        draw_curves(b, t, [(self.reference["torque"], "C0-", 1.5, f"{OURS}, n = {REFERENCE[0]} (reference)"),
+                           (self.results[(EXUDYN, finest)]["torque"], "C3--", 1.2, f"{EXUDYN}, n = {finest[0]}"),
+                           (self.results[(OURS, coarsest)]["torque"], "C9:", 1, f"{OURS}, n = {coarsest[0]}"),
+                           (self.results[(EXUDYN, coarsest)]["torque"], "C1:", 1, f"{EXUDYN}, n = {coarsest[0]}")],
+                    "drive torque at A [N m]",
+                    "drive torque over one revolution (smooth start, beta = 3e-5 s; grey: snap windows)")
+        save_figure(fig, png)
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

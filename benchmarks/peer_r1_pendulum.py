@@ -20,12 +20,9 @@ Exudyn, two models of the same physics:
     coordinates and a Lagrange multiplier).
 Writes r1_pendulum_precision.csv and .png.
 """
-import time
-
 import numpy as np
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, Panel, PeerStudy, exudyn_settings, exudyn_solve
 
 G, L, MASS, STOP = 9.81, 1.0, 1.0, 10.0
 R1_AT_10S = (0.275087462576, -0.961419205099)
@@ -39,17 +36,8 @@ def position_error(x, y):
 
 def ours(fmu, h, communication=0.1):
     run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF})
-    try:
-        start = time.perf_counter()
-        run.initialize()
-        for _ in range(int(round(STOP / communication))):
-            run.step(communication)
-        wall = time.perf_counter() - start
-        x, y = run.get("bob.position.x", "bob.position.y")
-        statistics = run.statistics()
-    finally:
-        run.free()
-    return dict(wall_time_s=wall, error=position_error(x, y), **statistics)
+    (x, y), wall, statistics = run.at_end(["bob.position.x", "bob.position.y"], STOP, communication)
+    return dict(wall_time_s=wall, error=position_error(x, y), rho_inf=RHO_INF, **statistics)
 
 
 def exudyn_kinematic_tree(h):
@@ -68,7 +56,7 @@ def exudyn_kinematic_tree(h):
     wall, statistics = exudyn_solve(mbs, exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF))
     angle = mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates)
     angle = float(np.ravel(angle)[0])
-    return dict(wall_time_s=wall, error=position_error(L * np.cos(angle), L * np.sin(angle)),
+    return dict(wall_time_s=wall, error=position_error(L * np.cos(angle), L * np.sin(angle)), rho_inf=RHO_INF,
                 **statistics)
 
 
@@ -89,46 +77,22 @@ def exudyn_mass_point(h):
     settings = exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF, residual_criterion=True)
     wall, statistics = exudyn_solve(mbs, settings)
     p = mbs.GetNodeOutput(node, exu.OutputVariableType.Position)
-    return dict(wall_time_s=wall, error=position_error(p[0], p[1]), **statistics)
+    return dict(wall_time_s=wall, error=position_error(p[0], p[1]), rho_inf=RHO_INF, **statistics)
 
 
-def run_study(args):
-    """Runs every code of the study; its rows."""
-    codes = [(OURS, "revolute joint, joint coordinate", lambda h: ours(args.fmu, h)),
-             (EXUDYN, "KinematicTree RevoluteZ (joint coordinate)", exudyn_kinematic_tree),
-             (EXUDYN, "MassPoint2D + ConnectorDistance (index 3)", exudyn_mass_point)]
-    rows = []
-    for code, model, run in codes:
-        for h in STEPS:
-            r = best_of(lambda: run(h), args.repeats)
-            rows.append(dict(code=code, h_or_elements=h, wall_time_s=r["wall_time_s"], error=r["error"], model=model,
-                             rho_inf=RHO_INF, steps=r["steps"], newton_iterations=r["newton_iterations"],
-                             factorizations=r.get("factorizations", ""),
-                             rejected_steps=r.get("rejected_steps", "")))
-            print(f"R1 {code:9s} {model:45s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:9.2f} ms  "
-                  f"error at 10 s {r['error']:9.2e} m  Newton it/step {r['newton_iterations'] / r['steps']:4.2f}",
-                  flush=True)
-    return rows
+class Study(PeerStudy):
+    label, name, repeats, fmu = "R1", "r1_pendulum", 3, FMUS / "pendulum.fmu"
+    settings, xlabel = STEPS, "wall time for 10 s simulated [s]"
 
+    def codes(self):
+        return [(OURS, "revolute joint, joint coordinate", lambda h: ours(self.args.fmu, h)),
+                (EXUDYN, "KinematicTree RevoluteZ (joint coordinate)", exudyn_kinematic_tree),
+                (EXUDYN, "MassPoint2D + ConnectorDistance (index 3)", exudyn_mass_point)]
 
-def main():
-    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "pendulum.fmu")
-    csv_path = args.out / "r1_pendulum_precision.csv"
-    if args.replot:
-        rows = read_csv(csv_path)
-    else:
-        rows = run_study(args)
-        write_csv(csv_path, rows)
-
-    fig, ax = figure()
-    plot_precision_work(ax, rows)
-    ax.set_xlabel("wall time for 10 s simulated [s]")
-    ax.set_ylabel("bob position error at t = 10 s [m]")
-    ax.set_title(f"R1 pendulum: error against run time (generalized-alpha, rho_inf = {RHO_INF}; labels: h)",
-                 fontsize=9)
-    png = args.out / "r1_pendulum_precision.png"
-    save_figure(fig, png)
+    def panels(self, tables):
+        return [Panel("bob position error at t = 10 s [m]",
+                      f"R1 pendulum: error against run time (generalized-alpha, rho_inf = {RHO_INF}; labels: h)")]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

@@ -32,8 +32,7 @@ Writes r2_double_pendulum_precision.csv and .png.
 
 import numpy as np
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, Panel, PeerStudy, exudyn_settings, exudyn_solve
 
 G, L, MASS, STOP, OUTPUT = 9.81, 1.0, 1.0, 10.0, 0.01
 J = MASS * L * L / 12  # about the centre of mass, perpendicular to the bar
@@ -71,7 +70,7 @@ def ours(fmu, h):
     p = s[:, [0, 1, 4, 5]].reshape(-1, 2, 2)
     v = s[:, [2, 3, 6, 7]].reshape(-1, 2, 2)
     angle = np.column_stack([s[:, 10], s[:, 10] + s[:, 11]])
-    return dict(wall_time_s=wall, rho_inf=RHO_INF, **metrics(p, v, s[:, 8:10], angle), **statistics)
+    return dict(wall_time_s=wall, **metrics(p, v, s[:, 8:10], angle), rho_inf=RHO_INF, **statistics)
 
 
 def exudyn_kinematic_tree(h):
@@ -104,7 +103,7 @@ def exudyn_kinematic_tree(h):
     p = np.stack([0.5 * L * e[:, 0], L * e[:, 0] + 0.5 * L * e[:, 1]], axis=1)
     v = np.stack([0.5 * L * rate[:, [0]] * n[:, 0], L * rate[:, [0]] * n[:, 0] + 0.5 * L * rate[:, [1]] * n[:, 1]],
                  axis=1)
-    return dict(wall_time_s=wall, rho_inf=RHO_INF, **metrics(p, v, rate, angle), **statistics)
+    return dict(wall_time_s=wall, **metrics(p, v, rate, angle), rho_inf=RHO_INF, **statistics)
 
 
 def exudyn_rigid_bodies(h):
@@ -139,51 +138,25 @@ def exudyn_rigid_bodies(h):
     v = np.stack([d[1][:, 1:3] for d in data], axis=1)
     w = np.column_stack([d[2][:, 3] for d in data])
     angle = np.column_stack([d[3][:, -1] for d in data])
-    return dict(wall_time_s=wall, rho_inf=RHO_INF_EXUDYN_REDUNDANT, **metrics(p, v, w, angle), **statistics)
+    return dict(wall_time_s=wall, **metrics(p, v, w, angle), rho_inf=RHO_INF_EXUDYN_REDUNDANT, **statistics)
 
 
-def run_study(args):
-    """Runs every code of the study; its rows."""
-    codes = [(OURS, "two revolute joints, joint coordinates", lambda h: ours(args.fmu, h)),
-             (EXUDYN, "KinematicTree 2 x RevoluteZ (joint coordinates)", exudyn_kinematic_tree),
-             (EXUDYN, f"RigidBody2D + RevoluteJoint2D (index 3, rho_inf {RHO_INF_EXUDYN_REDUNDANT})",
-              exudyn_rigid_bodies)]
-    rows = []
-    for code, model, run in codes:
-        for h in STEPS:
-            r = best_of(lambda: run(h), args.repeats)
-            rows.append(dict(code=code, h_or_elements=h, wall_time_s=r["wall_time_s"], error=r["error"], model=model,
-                             constraint_drift=r["constraint_drift"], rho_inf=r["rho_inf"], steps=r["steps"],
-                             newton_iterations=r["newton_iterations"], factorizations=r.get("factorizations", ""),
-                             rejected_steps=r.get("rejected_steps", "")))
-            print(f"R2 {code:9s} {model:48s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:9.2f} ms  "
-                  f"energy drift {r['error']:9.2e} m g L  constraint drift {r['constraint_drift']:8.1e} m  "
-                  f"Newton it/step {r['newton_iterations'] / r['steps']:4.2f}", flush=True)
-    return rows
+class Study(PeerStudy):
+    label, name, repeats, fmu = "R2", "r2_double_pendulum", 3, FMUS / "double_pendulum.fmu"
+    settings, xlabel = STEPS, "wall time for 10 s simulated [s]"
 
+    def codes(self):
+        return [(OURS, "two revolute joints, joint coordinates", lambda h: ours(self.args.fmu, h)),
+                (EXUDYN, "KinematicTree 2 x RevoluteZ (joint coordinates)", exudyn_kinematic_tree),
+                (EXUDYN, f"RigidBody2D + RevoluteJoint2D (index 3, rho_inf {RHO_INF_EXUDYN_REDUNDANT})",
+                 exudyn_rigid_bodies)]
 
-def main():
-    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "double_pendulum.fmu")
-    csv_path = args.out / "r2_double_pendulum_precision.csv"
-    if args.replot:
-        rows = read_csv(csv_path)
-    else:
-        rows = run_study(args)
-        write_csv(csv_path, rows)
-
-    fig, axes = figure(2, (12, 5))
-    plot_precision_work(axes[0], rows)
-    axes[0].set_xlabel("wall time for 10 s simulated [s]")
-    axes[0].set_ylabel("energy drift max |E(t) - E(0)| / (m g L)")
-    axes[0].set_title(f"R2 double pendulum: energy drift against run time (rho_inf = {RHO_INF}; labels: h)",
-                      fontsize=9)
-    plot_precision_work(axes[1], rows, error_key="constraint_drift", floor=1e-17)
-    axes[1].set_xlabel("wall time for 10 s simulated [s]")
-    axes[1].set_ylabel("constraint drift: largest joint-point mismatch [m]")
-    axes[1].set_title("R2: constraint drift (round-off in joint coordinates)", fontsize=9)
-    png = args.out / "r2_double_pendulum_precision.png"
-    save_figure(fig, png)
+    def panels(self, tables):
+        return [Panel("energy drift max |E(t) - E(0)| / (m g L)",
+                      f"R2 double pendulum: energy drift against run time (rho_inf = {RHO_INF}; labels: h)"),
+                Panel("constraint drift: largest joint-point mismatch [m]",
+                      "R2: constraint drift (round-off in joint coordinates)", "constraint_drift", 1e-17)]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

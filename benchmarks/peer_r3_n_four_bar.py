@@ -42,8 +42,7 @@ import importlib.util
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from peer_common import EXUDYN, OURS, ROOT, FmuRun, SceneFactory, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, OURS, ROOT, FmuRun, Panel, PeerStudy, exudyn_settings, exudyn_solve, result_row
 
 N, G, MASS, L = 40, 9.81, 1.0, 1.0
 J = MASS * L * L / 12
@@ -166,71 +165,39 @@ def exudyn_rigid_bodies(h):
     return dict(wall_time_s=wall, **metrics(p, v, w, angle), **statistics)
 
 
-def run_study(args):
-    """Runs every code of the study; its rows, and the full-length run."""
-    factory = SceneFactory()
-    try:
-        fmu = factory.fmu(scene(), "n_four_bar")
-        codes = [(OURS, "81 revolute tree joints + 40 cut joints", lambda h: ours(fmu, h)),
-                 (EXUDYN, "RigidBody2D + RevoluteJoint2D (index 3), sparse", exudyn_rigid_bodies)]
-        rows = []
-        for code, model, run in codes:
-            for h in STEPS:
-                r = best_of(lambda: run(h), args.repeats)
-                rows.append(dict(code=code, h_or_elements=h, wall_time_s=r["wall_time_s"], error=r["error"],
-                                 model=model, energy_drift=r["energy_drift"], constraint_drift=r["constraint_drift"],
-                                 simulated_s=STOP, rho_inf=RHO_INF,
-                                 steps=r["steps"], newton_iterations=r["newton_iterations"],
-                                 factorizations=r.get("factorizations", ""),
-                                 rejected_steps=r.get("rejected_steps", "")))
-                print(f"R3 {code:9s} {model:48s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:9.2f} ms  "
-                      f"crank angle error {r['error']:8.2e} rad  energy drift {r['energy_drift']:8.2e} m g L  "
-                      f"constraint drift {r['constraint_drift']:8.1e} m  Newton it/step "
-                      f"{r['newton_iterations'] / r['steps']:4.2f}  rejected {r.get('rejected_steps', '-')}",
-                      flush=True)
+class Study(PeerStudy):
+    label, name, repeats = "R3", "r3_n_four_bar", 2
+    settings, xlabel = STEPS, f"wall time for {STOP:g} s simulated [s]"
+    tables = ("precision", "full")
+    model = "81 revolute tree joints + 40 cut joints"
+
+    def codes(self):
+        self.scene_fmu = self.pack(scene(), "n_four_bar")
+        return [(OURS, self.model, lambda h: ours(self.scene_fmu, h)),
+                (EXUDYN, "RigidBody2D + RevoluteJoint2D (index 3), sparse", exudyn_rigid_bodies)]
+
+    def measure(self, r, code):
+        return dict(error=r["error"], energy_drift=r["energy_drift"], constraint_drift=r["constraint_drift"],
+                    simulated_s=STOP, rho_inf=RHO_INF)
+
+    def run(self):
+        tables = super().run()
         # Ours over the whole 20 s of A02, through its 20 singular configurations (Exudyn stops at the first).
-        r = ours(fmu, FULL_H, FULL)
-        full = dict(code=OURS, h_or_elements=FULL_H, wall_time_s=r["wall_time_s"], error=r["error"], model=codes[0][1],
-                    energy_drift=r["energy_drift"], constraint_drift=r["constraint_drift"], simulated_s=FULL,
-                    rho_inf=RHO_INF, steps=r["steps"], newton_iterations=r["newton_iterations"],
-                    factorizations=r["factorizations"], rejected_steps=r.get("rejected_steps", ""))
-        print(f"R3 {OURS} over {FULL:g} s, h = {FULL_H:g}: wall {r['wall_time_s']:.2f} s, crank angle error "
-              f"{r['error']:.2e} rad, energy drift {r['energy_drift']:.2e} m g L, constraint drift "
-              f"{r['constraint_drift']:.1e} m, Newton it/step {r['newton_iterations'] / r['steps']:.2f}, rejected "
-              f"{r.get('rejected_steps', '-')}", flush=True)
-    finally:
-        factory.close()
-    return rows, full
+        r = ours(self.scene_fmu, FULL_H, FULL)
+        tables["full"] = [result_row("R3 whole run", OURS, self.model, FULL_H, r,
+                                     dict(self.measure(r, OURS), simulated_s=FULL))]
+        return tables
 
-
-def main():
-    args = study_arguments(__doc__, repeats=2)
-    csv_path = args.out / "r3_n_four_bar_precision.csv"
-    if args.replot:
-        rows, full = read_csv(csv_path), read_csv(args.out / "r3_n_four_bar_full.csv")[0]
-        full = {**full, "error": float(full["error"]), "wall_time_s": float(full["wall_time_s"])}
-    else:
-        rows, full = run_study(args)
-        write_csv(csv_path, rows)
-        write_csv(args.out / "r3_n_four_bar_full.csv", [full])
-
-    fig, axes = figure(3, (16, 5))
-    plot_precision_work(axes[0], rows)
-    axes[0].set_ylabel(f"crank 0 angle error, max over 0-{STOP:g} s [rad]")
-    axes[0].set_title(f"R3 N-four-bar, N = {N}, 0-{STOP:g} s: Exudyn stops at the first singular configuration\n"
-                      f"(0.72 s); ours over {FULL:g} s at h = {FULL_H:g}: angle error {full['error']:.1e} rad, "
-                      f"{full['wall_time_s']:.1f} s (rho_inf = {RHO_INF}; labels: h)", fontsize=8)
-    plot_precision_work(axes[1], rows, error_key="energy_drift")
-    axes[1].set_ylabel("energy drift max |E(t) - E(0)| / (m g L)")
-    axes[1].set_title("R3: energy drift", fontsize=9)
-    plot_precision_work(axes[2], rows, error_key="constraint_drift", floor=1e-17)
-    axes[2].set_ylabel("constraint drift: largest joint-point mismatch [m]")
-    axes[2].set_title("R3: constraint drift", fontsize=9)
-    for ax in axes:
-        ax.set_xlabel(f"wall time for {STOP:g} s simulated [s]")
-    png = args.out / "r3_n_four_bar_precision.png"
-    save_figure(fig, png)
+    def panels(self, tables):
+        full = tables["full"][0]
+        return [Panel(f"crank 0 angle error, max over 0-{STOP:g} s [rad]",
+                      f"R3 N-four-bar, N = {N}, 0-{STOP:g} s: Exudyn stops at the first singular configuration\n"
+                      f"(0.72 s); ours over {FULL:g} s at h = {FULL_H:g}: angle error {float(full['error']):.1e} rad, "
+                      f"{float(full['wall_time_s']):.1f} s (rho_inf = {RHO_INF}; labels: h)", fontsize=8),
+                Panel("energy drift max |E(t) - E(0)| / (m g L)", "R3: energy drift", "energy_drift"),
+                Panel("constraint drift: largest joint-point mismatch [m]", "R3: constraint drift", "constraint_drift",
+                      1e-17)]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

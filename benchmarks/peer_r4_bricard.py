@@ -36,8 +36,7 @@ Writes r4_bricard_precision.csv and .png.
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, Panel, PeerStudy, exudyn_settings, exudyn_solve
 
 G, MASS, L, A, STOP, OUTPUT = 9.81, 1.0, 1.0, 0.1, 10.0, 0.01
 POINTS = np.array([(0, 0, 0), (1, 0, 0), (1, -1, 0), (1, -1, 1), (0, -1, 1), (0, 0, 1)], dtype=float)
@@ -96,7 +95,7 @@ def constraint_drift(p, R):
 
 def metrics(p, v, R, w):
     return dict(error=float(np.max(np.abs(energy(p, v, R, w) - E0))) / MGL, constraint_drift=constraint_drift(p, R),
-                travel=float(np.ptp(p[:, 0, 0])))
+                rho_inf=RHO_INF, rod1_x_travel_m=float(np.ptp(p[:, 0, 0])))
 
 
 def ours(fmu, h):
@@ -142,45 +141,20 @@ def exudyn_rigid_bodies(h):
     return dict(wall_time_s=wall, **metrics(p, v, R, w), **statistics)
 
 
-def run_study(args):
-    """Runs every code of the study; its rows."""
-    codes = [(OURS, "5 revolute tree joints + 1 cut joint (redundant row)", lambda h: ours(args.fmu, h)),
-             (EXUDYN, "RigidBody EP + 6 JointRevoluteZ, ignoreSingularJacobian", exudyn_rigid_bodies)]
-    rows = []
-    for code, model, run in codes:
-        for h in STEPS:
-            r = best_of(lambda: run(h), args.repeats)
-            rows.append(dict(code=code, h_or_elements=h, wall_time_s=r["wall_time_s"], error=r["error"], model=model,
-                             constraint_drift=r["constraint_drift"], rho_inf=RHO_INF, rod1_x_travel_m=r["travel"],
-                             steps=r["steps"], newton_iterations=r["newton_iterations"],
-                             factorizations=r.get("factorizations", ""), rejected_steps=r.get("rejected_steps", "")))
-            print(f"R4 {code:9s} {model:56s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:9.2f} ms  "
-                  f"energy drift {r['error']:9.2e} m g L  constraint drift {r['constraint_drift']:8.1e}  "
-                  f"Newton it/step {r['newton_iterations'] / r['steps']:4.2f}", flush=True)
-    return rows
+class Study(PeerStudy):
+    label, name, repeats, fmu = "R4", "r4_bricard", 2, FMUS / "bricard.fmu"
+    settings, xlabel = STEPS, "wall time for 10 s simulated [s]"
 
+    def codes(self):
+        return [(OURS, "5 revolute tree joints + 1 cut joint (redundant row)", lambda h: ours(self.args.fmu, h)),
+                (EXUDYN, "RigidBody EP + 6 JointRevoluteZ, ignoreSingularJacobian", exudyn_rigid_bodies)]
 
-def main():
-    args = study_arguments(__doc__, repeats=2, fmu=FMUS / "bricard.fmu")
-    csv_path = args.out / "r4_bricard_precision.csv"
-    if args.replot:
-        rows = read_csv(csv_path)
-    else:
-        rows = run_study(args)
-        write_csv(csv_path, rows)
-
-    fig, axes = figure(2, (12, 5))
-    plot_precision_work(axes[0], rows)
-    axes[0].set_xlabel("wall time for 10 s simulated [s]")
-    axes[0].set_ylabel("energy drift max |E(t) - E(0)| / (m g L)")
-    axes[0].set_title(f"R4 Bricard: energy drift against run time (rho_inf = {RHO_INF}; labels: h)", fontsize=9)
-    plot_precision_work(axes[1], rows, error_key="constraint_drift", floor=1e-17)
-    axes[1].set_xlabel("wall time for 10 s simulated [s]")
-    axes[1].set_ylabel("constraint drift: largest joint violation [m or rad]")
-    axes[1].set_title("R4: constraint drift", fontsize=9)
-    png = args.out / "r4_bricard_precision.png"
-    save_figure(fig, png)
+    def panels(self, tables):
+        return [Panel("energy drift max |E(t) - E(0)| / (m g L)",
+                      f"R4 Bricard: energy drift against run time (rho_inf = {RHO_INF}; labels: h)"),
+                Panel("constraint drift: largest joint violation [m or rad]", "R4: constraint drift",
+                      "constraint_drift", 1e-17)]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

@@ -30,8 +30,7 @@ Writes r5_slider_crank_precision.csv and .png.
 
 import numpy as np
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, Panel, PeerStudy, exudyn_settings, exudyn_solve
 
 R, LC, E, OMEGA, G = 0.5, 2.0, 0.1, 2 * np.pi, 9.81
 STOP, OUTPUT = 2.0, 0.01
@@ -65,7 +64,8 @@ def initial_velocities():
 
 def metrics(t, x, v):
     x_exact, v_exact = exact(t)
-    return dict(error=float(np.max(np.abs(x - x_exact))), velocity_error=float(np.max(np.abs(v - v_exact))))
+    return dict(error=float(np.max(np.abs(x - x_exact))), velocity_error=float(np.max(np.abs(v - v_exact))),
+                rho_inf=RHO_INF)
 
 
 def ours(fmu, h):
@@ -133,46 +133,22 @@ def exudyn_rigid_bodies(h):
     return dict(wall_time_s=wall, **metrics(position[:, 0], position[:, 1], velocity[:, 1]), **statistics)
 
 
-def run_study(args):
-    """Runs every code of the study; its rows."""
-    codes = [(OURS, "revolute + prismatic tree, cut at the slider pin, driven crank", lambda h: ours(args.fmu, h)),
-             (EXUDYN, "RigidBody2D + Revolute/PrismaticJoint2D, driven coordinate", exudyn_rigid_bodies)]
-    rows = []
-    for code, model, run in codes:
-        for h in STEPS:
-            r = best_of(lambda: run(h), args.repeats)
-            rows.append(dict(code=code, h_or_elements=h, wall_time_s=r["wall_time_s"], error=r["error"], model=model,
-                             velocity_error=r["velocity_error"], rho_inf=RHO_INF, steps=r["steps"],
-                             newton_iterations=r["newton_iterations"], factorizations=r.get("factorizations", ""),
-                             rejected_steps=r.get("rejected_steps", "")))
-            print(f"R5 {code:9s} {model:62s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:8.2f} ms  "
-                  f"position error {r['error']:8.1e} m  velocity error {r['velocity_error']:8.2e} m/s  "
-                  f"Newton it/step {r['newton_iterations'] / r['steps']:4.2f}", flush=True)
-    return rows
+class Study(PeerStudy):
+    label, name, repeats, fmu = "R5", "r5_slider_crank", 3, FMUS / "slider_crank.fmu"
+    settings, xlabel = STEPS, "wall time for 2 s simulated [s]"
 
+    def codes(self):
+        return [(OURS, "revolute + prismatic tree, cut at the slider pin, driven crank",
+                 lambda h: ours(self.args.fmu, h)),
+                (EXUDYN, "RigidBody2D + Revolute/PrismaticJoint2D, driven coordinate", exudyn_rigid_bodies)]
 
-def main():
-    args = study_arguments(__doc__, repeats=3, fmu=FMUS / "slider_crank.fmu")
-    csv_path = args.out / "r5_slider_crank_precision.csv"
-    if args.replot:
-        rows = read_csv(csv_path)
-    else:
-        rows = run_study(args)
-        write_csv(csv_path, rows)
-
-    fig, axes = figure(2, (12, 5))
-    plot_precision_work(axes[0], rows, floor=1e-17)
-    axes[0].set_xlabel("wall time for 2 s simulated [s]")
-    axes[0].set_ylabel("slider position error, max |x - x(theta)| [m]")
-    axes[0].set_title(f"R5 slider-crank: position against exact x(theta) (rho_inf = {RHO_INF}; labels: h)",
-                      fontsize=9)
-    plot_precision_work(axes[1], rows, error_key="velocity_error")
-    axes[1].set_xlabel("wall time for 2 s simulated [s]")
-    axes[1].set_ylabel("slider velocity error, max |v - omega dx/dtheta| [m/s]")
-    axes[1].set_title("R5: slider velocity against the exact derivative", fontsize=9)
-    png = args.out / "r5_slider_crank_precision.png"
-    save_figure(fig, png)
+    def panels(self, tables):
+        return [Panel("slider position error, max |x - x(theta)| [m]",
+                      f"R5 slider-crank: position against exact x(theta) (rho_inf = {RHO_INF}; labels: h)",
+                      floor=1e-17),
+                Panel("slider velocity error, max |v - omega dx/dtheta| [m/s]",
+                      "R5: slider velocity against the exact derivative", "velocity_error")]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

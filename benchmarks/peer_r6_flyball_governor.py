@@ -32,8 +32,7 @@ import math
 
 import numpy as np
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, best_of, exudyn_settings, exudyn_solve, figure, \
-    plot_precision_work, read_csv, save_figure, study_arguments, write_csv
+from peer_common import EXUDYN, FMUS, OURS, FmuRun, Panel, PeerStudy, exudyn_settings, exudyn_solve
 
 G, OMEGA = 9.81, 2 * math.pi
 DENSITY, SECTION, LENGTH = 3000.0, 0.01, 1.0
@@ -130,49 +129,30 @@ def deviation(run, reference):
             float(np.max(np.abs(run["hinge"][:n] - reference["hinge"][:n]))))
 
 
-def run_study(args):
-    """Runs every code of the study; its rows."""
-    reference = ours(args.fmu, REFERENCE_H)
-    print(f"R6 reference: ours at h = {REFERENCE_H:g} ({reference['wall_time_s']:.2f} s, "
-          f"{reference['rejected_steps']} rejected substeps)", flush=True)
-    codes = [(OURS, "joint coordinates, spring_damper couplers", lambda h: ours(args.fmu, h)),
-             (EXUDYN, "KinematicTree (4 coordinates) + ConnectorSpringDamper", exudyn_kinematic_tree)]
-    rows = []
-    for code, model, run in codes:
-        for h in STEPS:
-            r = best_of(lambda: run(h), args.repeats)
-            error, hinge_error = deviation(r, reference)
-            rows.append(dict(code=code, h_or_elements=h, wall_time_s=r["wall_time_s"], error=error, model=model,
-                             hinge_error=hinge_error, reference_h=REFERENCE_H, rho_inf=RHO_INF, steps=r["steps"],
-                             newton_iterations=r["newton_iterations"], factorizations=r.get("factorizations", ""),
-                             rejected_steps=r.get("rejected_steps", "")))
-            print(f"R6 {code:9s} {model:54s} h={h:7.1e}  wall {r['wall_time_s'] * 1e3:8.2f} ms  "
-                  f"slider error {error:8.2e} m  hinge error {hinge_error:8.2e} rad  Newton it/step "
-                  f"{r['newton_iterations'] / r['steps']:4.2f}  rejected {r.get('rejected_steps', '-')}", flush=True)
-    return rows
+class Study(PeerStudy):
+    label, name, repeats, fmu = "R6", "r6_flyball_governor", 2, FMUS / "flyball_governor.fmu"
+    settings, xlabel = STEPS, "wall time for 10 s simulated [s]"
 
+    def codes(self):
+        return [(OURS, "joint coordinates, spring_damper couplers", lambda h: ours(self.args.fmu, h)),
+                (EXUDYN, "KinematicTree (4 coordinates) + ConnectorSpringDamper", exudyn_kinematic_tree)]
 
-def main():
-    args = study_arguments(__doc__, repeats=2, fmu=FMUS / "flyball_governor.fmu")
-    csv_path = args.out / "r6_flyball_governor_precision.csv"
-    if args.replot:
-        rows = read_csv(csv_path)
-    else:
-        rows = run_study(args)
-        write_csv(csv_path, rows)
+    def run(self):
+        self.reference = ours(self.args.fmu, REFERENCE_H)
+        print(f"R6 reference: ours at h = {REFERENCE_H:g} ({self.reference['wall_time_s']:.2f} s, "
+              f"{self.reference['rejected_steps']} rejected substeps)", flush=True)
+        return super().run()
 
-    fig, axes = figure(2, (12, 5))
-    plot_precision_work(axes[0], rows)
-    axes[0].set_xlabel("wall time for 10 s simulated [s]")
-    axes[0].set_ylabel(f"slider position error, max over 10 s, against ours at h = {REFERENCE_H:g} [m]")
-    axes[0].set_title(f"R6 stiff flyball governor (rho_inf = {RHO_INF}; labels: h)", fontsize=9)
-    plot_precision_work(axes[1], rows, error_key="hinge_error")
-    axes[1].set_xlabel("wall time for 10 s simulated [s]")
-    axes[1].set_ylabel("rod hinge angle error, max over 10 s [rad]")
-    axes[1].set_title("R6: rod hinge angle against the same reference", fontsize=9)
-    png = args.out / "r6_flyball_governor_precision.png"
-    save_figure(fig, png)
+    def measure(self, r, code):
+        error, hinge_error = deviation(r, self.reference)
+        return dict(error=error, hinge_error=hinge_error, reference_h=REFERENCE_H, rho_inf=RHO_INF)
+
+    def panels(self, tables):
+        return [Panel(f"slider position error, max over 10 s, against ours at h = {REFERENCE_H:g} [m]",
+                      f"R6 stiff flyball governor (rho_inf = {RHO_INF}; labels: h)"),
+                Panel("rod hinge angle error, max over 10 s [rad]", "R6: rod hinge angle against the same reference",
+                      "hinge_error")]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

@@ -37,16 +37,14 @@ Writes tip_mass_precision.csv and .png.
 import numpy as np
 from scipy.optimize import brentq
 
-from peer_common import EXUDYN, OURS, FmuRun, SceneFactory, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
-    exudyn_settings, exudyn_solve, figure, grid_study, mesh_and_step, plot_precision_work, read_csv, refinement_grid, \
-    save_figure, study_arguments, write_csv
-from peer_f3_vibration import first_frequency, frequency_error
+from peer_common import EXUDYN, OURS, Panel, PeerStudy, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
+    exudyn_settings, exudyn_solve, mesh_and_step, refinement_grid
+from peer_f3_vibration import OUTPUT, PULSE, STOP, exudyn_pulse, first_frequency, frequency_error, ours
 
 L, EI, RHO_A, EA, RHO_I, TIP_MASS = 1.0, 10.0, 1.0, 1e7, 1e-6, 1.0
-PULSE, FORCE = 0.02, 0.01 * EI / L**2
+FORCE = 0.01 * EI / L**2
 PAIRS = [(2, 1e-2), (4, 1e-2), (8, 5e-3), (16, 2.5e-3), (32, 1.25e-3)]
 GRID = refinement_grid(PAIRS)  # PAIRS plus finer steps on the two coarsest meshes
-STOP, OUTPUT = 10.0, 0.01
 RHO_INF = 0.9
 
 
@@ -77,27 +75,10 @@ def tip_mass_scene(n):
                 "outputs": {"nodes": [n]}}]}
 
 
-def ours(fmu, h):
-    run = FmuRun(fmu, {"solver.h_max": h})
-    s, wall, statistics = run.sample(["tip.position.y"], STOP, OUTPUT)
-    tip = s[1:, 0]  # from t = OUTPUT on
-    t = OUTPUT * np.arange(1, len(tip) + 1)
-    return dict(wall_time_s=wall, f1=first_frequency(t, tip, EXACT), **statistics)
-
-
-def _pulse(mbs, t, loadVector):
-    import exudyn as exu
-    sym = exu.symbolic
-    s = sym.sin(np.pi / PULSE * t)
-    return [0, sym.IfThenElse(t < PULSE, FORCE * s * s, sym.Real(0.0)), 0]
-
-
 def exudyn_beam_2d(n, h):
     import exudyn as exu
-    from exudyn.advancedUtilities import CreateSymbolicUserFunction
-    from exudyn.itemInterface import LoadForceVector, MarkerBodyPosition, MarkerNodeCoordinate, \
-        MarkerNodePosition, NodeRigidBody2D, ObjectConnectorCoordinate, ObjectJointRevolute2D, ObjectRigidBody2D, \
-        SensorBody
+    from exudyn.itemInterface import MarkerBodyPosition, MarkerNodeCoordinate, MarkerNodePosition, NodeRigidBody2D, \
+        ObjectConnectorCoordinate, ObjectJointRevolute2D, ObjectRigidBody2D, SensorBody
 
     mbs = exu.SystemContainer().AddSystem()
     nodes = exudyn_beam_line_2d(mbs, n, L, RHO_A, RHO_I, EI, EA, EA)
@@ -110,10 +91,7 @@ def exudyn_beam_2d(n, h):
     mbs.AddObject(ObjectConnectorCoordinate(markerNumbers=[
         mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[-1], coordinate=2)),
         mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=tip_node, coordinate=2))]))
-    load = mbs.AddLoad(LoadForceVector(markerNumber=mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[-1])),
-                                       loadVector=[0.0, 0.0, 0.0]))
-    pulse = CreateSymbolicUserFunction(mbs, _pulse, "loadVectorUserFunction", load)  # alive through the solve
-    mbs.SetLoadParameter(load, "loadVectorUserFunction", pulse)
+    pulse = exudyn_pulse(mbs, nodes[-1], FORCE)  # alive through the solve
     sensor = mbs.AddSensor(SensorBody(bodyNumber=tip, outputVariableType=exu.OutputVariableType.Position,
                                       storeInternal=True, writeToFile=False))
     mbs.Assemble()
@@ -123,38 +101,25 @@ def exudyn_beam_2d(n, h):
     return dict(wall_time_s=wall, f1=first_frequency(data[:, 0], data[:, 2], EXACT), **statistics)
 
 
-def run_study(args):
-    """Runs every code of the study; its rows."""
-    factory = SceneFactory()
-    try:
-        fmus = {n: factory.fmu(tip_mass_scene(n), f"tip{n}") for n, _ in GRID}
-        rows = grid_study("tip mass", ((OURS, "3D corotational beam, tip body on a fixed joint",
-                                        lambda n, h: ours(fmus[n], h)),
-                                       (EXUDYN, "BeamGeometricallyExact2D, RigidBody2D welded", exudyn_beam_2d)),
-                          GRID, args.repeats, lambda r: frequency_error(r, EXACT[0]))
-    finally:
-        factory.close()
-    return rows
+class Study(PeerStudy):
+    label, name, repeats = "tip mass", "tip_mass", 2
+    settings, xlabel = GRID, "wall time for 10 s simulated [s]"
+    annotate = staticmethod(mesh_and_step)
 
+    def codes(self):
+        fmus = {n: self.pack(tip_mass_scene(n), f"tip{n}") for n, _ in self.settings}
+        return [(OURS, "3D corotational beam, tip body on a fixed joint",
+                 lambda n, h: ours(fmus[n], "tip.position.y", h, EXACT)),
+                (EXUDYN, "BeamGeometricallyExact2D, RigidBody2D welded", exudyn_beam_2d)]
 
-def main():
-    args = study_arguments(__doc__, repeats=2)
-    csv_path = args.out / "tip_mass_precision.csv"
-    if args.replot:
-        rows = read_csv(csv_path)
-    else:
-        rows = run_study(args)
-        write_csv(csv_path, rows)
+    def measure(self, r, code):
+        return frequency_error(r, EXACT[0])
 
-    fig, ax = figure()
-    plot_precision_work(ax, rows, annotate=mesh_and_step)
-    ax.set_xlabel("wall time for 10 s simulated [s]")
-    ax.set_ylabel("relative error of the first bending frequency")
-    ax.set_title(f"Cantilever with a rigid tip body (mu = 1) on a fixed joint: f1 against {EXACT[0]:.7f} Hz\n"
-                 "(labels: elements / substep)", fontsize=9)
-    png = args.out / "tip_mass_precision.png"
-    save_figure(fig, png)
+    def panels(self, tables):
+        return [Panel("relative error of the first bending frequency",
+                      "Cantilever with a rigid tip body (mu = 1) on a fixed joint: f1 against "
+                      f"{EXACT[0]:.7f} Hz\n(labels: elements / substep)")]
 
 
 if __name__ == "__main__":
-    main()
+    Study().main(__doc__)

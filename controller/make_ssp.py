@@ -20,6 +20,8 @@ import sys
 import xml.etree.ElementTree as ET
 import zipfile
 
+from packing import write_zip, xml_text
+
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
@@ -98,11 +100,6 @@ def parameter_values(system, channels):
     return root
 
 
-def xml_text(root):
-    ET.indent(root)
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
-
-
 def make_ssp(system_path, plant_fmu, controller_fmu, out):
     system = json.loads(pathlib.Path(system_path).read_text())
     channels = checked_channels(system, fmu_variables(plant_fmu), fmu_variables(controller_fmu))
@@ -110,12 +107,10 @@ def make_ssp(system_path, plant_fmu, controller_fmu, out):
     controller_source = f"resources/{pathlib.Path(controller_fmu).name}"
     for prefix, uri in (("ssd", SSD), ("ssc", SSC), ("ssv", SSV), ("osp", OSP)):
         ET.register_namespace(prefix, uri)
-    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
-        z.writestr("SystemStructure.ssd",
-                   xml_text(system_structure(system, channels, plant_source, controller_source)))
-        z.writestr("resources/controller.ssv", xml_text(parameter_values(system, channels)))
-        z.write(plant_fmu, plant_source)
-        z.write(controller_fmu, controller_source)
+    write_zip(out, {"SystemStructure.ssd": xml_text(system_structure(system, channels, plant_source,
+                                                                     controller_source)),
+                    "resources/controller.ssv": xml_text(parameter_values(system, channels)),
+                    plant_source: pathlib.Path(plant_fmu), controller_source: pathlib.Path(controller_fmu)})
 
 
 def main():

@@ -13,7 +13,8 @@ import re
 import sys
 import uuid
 import xml.etree.ElementTree as ET
-import zipfile
+
+from packing import write_zip, xml_text
 
 FORMAT = "mfbd-pid/1"
 PLATFORMS = {"linux64": ".so", "win64": ".dll"}
@@ -71,8 +72,7 @@ def model_description(name, channels, guid):
         command, setpoint, measurement = 2 * channels + k + 1, k + 1, channels + k + 1
         ET.SubElement(outputs, "Unknown", index=str(command), dependencies=f"{setpoint} {measurement}")
         ET.SubElement(initial, "Unknown", index=str(command))
-    ET.indent(root)
-    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+    return xml_text(root)
 
 
 def pack(out, channels, binaries, platform="all", name="pid_controller"):
@@ -93,9 +93,7 @@ def pack(out, channels, binaries, platform="all", name="pid_controller"):
             raise ValueError(f"--platform {p}: no {binary} (build it first)")
     if not any(n.startswith("binaries/") for n in entries):
         raise ValueError(f"binaries folder '{binaries}' has no pid_controller binary (build the project first)")
-    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as z:
-        for entry, data in entries.items():
-            z.writestr(entry, data)
+    write_zip(out, entries)
 
 
 def main():

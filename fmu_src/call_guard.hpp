@@ -1,11 +1,9 @@
-// The call-sequence check and exception guard every fmi2* entry point
-// goes through (FMI 2.0 section 4.2.4: allowed states per function).
+// The call-sequence check and exception guard every fmi2* entry point of
+// the plant goes through (FMI 2.0 section 4.2.4: allowed states per
+// function, as masks of FmuState).
 #pragma once
-#include <exception>
-#include <new>
-#include <string>
-
 #include "fmi2Functions.h"
+#include "entry_point.hpp"
 #include "instance.hpp"
 
 namespace mfbd {
@@ -25,17 +23,7 @@ inline constexpr unsigned kStatus = kStepComplete | kStepFailed | kTerminated;
 // Runs `body` on a checked instance; maps exceptions to fmi2Error.
 template <class Body>
 fmi2Status guarded(fmi2Component c, const char* function, unsigned mask, Body body) {
-  if (!c) return fmi2Error;
-  Instance* instance = static_cast<Instance*>(c);
-  if (!instance->allow(function, mask)) return fmi2Error;
-  try {
-    return body(instance);
-  } catch (const std::bad_alloc&) {
-    return instance->fail(function, "out of memory");
-  } catch (const std::exception& e) {
-    return instance->fail(function, std::string("internal error: ") + e.what());
-  }
+  return guardedCall<Instance>(c, function, mask, body);
 }
-
 
 }  // namespace mfbd

@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "instance.hpp"
+#include "math/number_text.hpp"
 #include "model_description.hpp"
-#include "scene/number_text.hpp"
 
 namespace mfbd {
 

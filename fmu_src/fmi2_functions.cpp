@@ -21,27 +21,14 @@ const char* fmi2GetVersion(void) { return fmi2Version; }
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions* functions,
                               fmi2Boolean /*visible*/, fmi2Boolean loggingOn) {
-  auto report = [&](const char* message) {
-    if (functions && functions->logger)
-      functions->logger(functions->componentEnvironment, instanceName ? instanceName : "", fmi2Error,
-                        "logStatusError", "fmi2Instantiate: %s", message);
-  };
-  if (!instanceName || !*instanceName) {
-    report("instanceName must be a non-empty string");
-    return nullptr;
-  }
-  if (fmuType != fmi2CoSimulation) {
-    report("this FMU supports Co-Simulation only (fmuType must be fmi2CoSimulation)");
-    return nullptr;
-  }
-  if (!fmuGUID || !fmuResourceLocation) {
-    report("fmuGUID and fmuResourceLocation must not be null");
+  if (const char* why = instantiateArgumentError(instanceName, fmuType, fmuGUID, fmuResourceLocation)) {
+    reportInstantiateError(functions, instanceName, why);
     return nullptr;
   }
   try {
     return Instance::create(instanceName, fmuGUID, fmuResourceLocation, functions, loggingOn);
   } catch (const std::exception& e) {
-    report(e.what());
+    reportInstantiateError(functions, instanceName, e.what());
     return nullptr;
   }
 }

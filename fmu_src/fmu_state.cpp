@@ -17,7 +17,7 @@
 
 #include "call_guard.hpp"
 #include "instance.hpp"
-#include "scene/number_text.hpp"
+#include "math/number_text.hpp"
 
 namespace mfbd {
 

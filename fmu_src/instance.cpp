@@ -7,9 +7,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "entry_point.hpp"
+#include "math/number_text.hpp"
 #include "model_description.hpp"
 #include "resource_uri.hpp"
-#include "scene/number_text.hpp"
 
 namespace mfbd {
 
@@ -49,9 +50,7 @@ bool Instance::logs(fmi2Status status, const char* category) const {
 
 void Instance::log(fmi2Status status, const char* category, const std::string& message) const {
   if (!logs(status, category)) return;
-  std::string escaped;  // the logger takes a printf format
-  for (char c : message) escaped += c == '%' ? std::string("%%") : std::string(1, c);
-  callbacks_.logger(callbacks_.componentEnvironment, name_.c_str(), status, category, escaped.c_str());
+  callbacks_.logger(callbacks_.componentEnvironment, name_.c_str(), status, category, loggerFormat(message).c_str());
 }
 
 fmi2Status Instance::fail(const char* function, const std::string& message) {
@@ -84,7 +83,7 @@ Instance* Instance::create(const std::string& name, const std::string& guid, con
   try {
     c->scene_ = parseScene(c->sceneText_);
     Simulation check(c->scene_);  // assembly errors surface here, not later
-    c->table_ = variableTable(c->scene_, ModelNumbering(check.system().model()));
+    c->table_ = variableTable(c->scene_, check.numbering());
   } catch (const SceneError& e) {
     c->fail("fmi2Instantiate", std::string("resources/scene.json: ") + e.what());
     return nullptr;
@@ -145,8 +144,7 @@ std::unique_ptr<Simulation> Instance::makeSimulation(const std::vector<double>& 
   Scene scene = parseScene(sceneText_, user);
   for (std::size_t i = 0; i < table_.size(); ++i)
     if (table_[i].causality == Causality::Parameter) setSceneParameter(scene, table_[i].quantity, values[i]);
-  scene.solver.errorTolerance = tolerance;
-  return std::make_unique<Simulation>(scene);
+  return std::make_unique<Simulation>(scene, tolerance);
 }
 
 // Scene with the current parameter values -> Simulation at startTime.

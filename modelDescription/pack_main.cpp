@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -155,17 +156,17 @@ int main(int argc, char** argv) {
       return 0;
     }
     mfbd::Scene scene;
-    mfbd::Model model;
+    std::unique_ptr<mfbd::Simulation> check;
     try {
       scene = mfbd::parseScene(text);
-      model = mfbd::assemble(scene);  // what the binary will do at instantiate
+      check = std::make_unique<mfbd::Simulation>(scene);  // what the binary will do at instantiate
     } catch (const mfbd::SceneError& e) {
       std::cerr << scenePath << ": " << e.what() << "\n";
       return 1;
     }
     for (const std::string& note : scene.notes) std::cout << "mfbd-pack: " << note << "\n";
     const std::string id = scene.name;
-    const auto table = mfbd::variableTable(scene, mfbd::ModelNumbering(model));
+    const auto table = mfbd::variableTable(scene, check->numbering());
     mfbd::Capabilities caps;
     std::vector<mfbd::ZipEntry> entries;
     entries.push_back({"modelDescription.xml",

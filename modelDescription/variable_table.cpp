@@ -35,6 +35,10 @@ class TableBuilder {
   void output(const std::string& name, const std::string& unit, const std::string& description, Quantity q) {
     add(name, Causality::Output, Variability::Continuous, unit, description, q);
   }
+  // Inputs start at 0 (no force, no rate) and vary continuously.
+  void input(const std::string& name, const std::string& unit, const std::string& description, Quantity q) {
+    add(name, Causality::Input, Variability::Continuous, unit, description, q, 0.0);
+  }
   std::vector<Variable> table;
 };
 
@@ -95,9 +99,9 @@ void jointInputs(const Scene& scene, TableBuilder& t) {
     const JointSpec& jt = scene.joints[j];
     if (jt.driveRateInput) {
       const bool angular = isAngle(jointCoordinateNames(jt.type)[0]);
-      t.add(jt.name + ".drive_rate", Causality::Input, Variability::Continuous, angular ? "rad/s" : "m/s",
-            "rate of the driven coordinate, held over a step (the coordinate integrates it)",
-            {QK::JointDriveRate, j}, 0.0);
+      t.input(jt.name + ".drive_rate", angular ? "rad/s" : "m/s",
+              "rate of the driven coordinate, held over a step (the coordinate integrates it)",
+              {QK::JointDriveRate, j});
     }
     if (!jt.torqueInput) continue;
     const auto names = jointCoordinateNames(jt.type);
@@ -105,8 +109,8 @@ void jointInputs(const Scene& scene, TableBuilder& t) {
       const bool angular = isAngle(names[d]);
       const std::string name = names.size() == 1 ? (angular ? "torque" : "force")
                                                  : (angular ? "torque_" : "force_") + names[d];
-      t.add(jt.name + "." + name, Causality::Input, Variability::Continuous, angular ? "N.m" : "N",
-            "generalized force along " + names[d], {QK::JointForceInput, j, d}, 0.0);
+      t.input(jt.name + "." + name, angular ? "N.m" : "N", "generalized force along " + names[d],
+              {QK::JointForceInput, j, d});
     }
   }
 }
@@ -115,26 +119,24 @@ void jointInputs(const Scene& scene, TableBuilder& t) {
 void wrenchInputs(TableBuilder& t, const std::string& owner, const char* torque, const std::string& what,
                   const std::string& frame, QK kind, int offset) {
   for (int c = 0; c < 3; ++c)
-    t.add(owner + ".force." + kAxes[c], Causality::Input, Variability::Continuous, "N",
-          what + " force, " + frame, {kind, offset + c}, 0.0);
+    t.input(owner + ".force." + kAxes[c], "N", what + " force, " + frame, {kind, offset + c});
   for (int c = 0; c < 3; ++c)
-    t.add(owner + "." + torque + "." + kAxes[c], Causality::Input, Variability::Continuous, "N.m",
-          what + " " + torque + ", " + frame, {kind, offset + 3 + c}, 0.0);
+    t.input(owner + "." + torque + "." + kAxes[c], "N.m", what + " " + torque + ", " + frame, {kind, offset + 3 + c});
 }
 
 // Force-element and flexible-node inputs, at the offsets assembly gave.
 void modelInputs(const ModelNumbering& model, TableBuilder& t) {
   for (const ModelNumbering::ForceInput& e : model.forceInputs()) {
     if (e.actuator)
-      t.add(e.name + ".actuator_force", Causality::Input, Variability::Continuous, "N",
-            "actuator tension added to the spring-damper", {QK::ForceInput, e.offset}, 0.0);
+      t.input(e.name + ".actuator_force", "N", "actuator tension added to the spring-damper",
+              {QK::ForceInput, e.offset});
     else
       wrenchInputs(t, e.name, "torque", "applied", e.bodyFrame ? "body frame" : "world", QK::ForceInput, e.offset);
   }
   for (const ModelNumbering::NodeInput& n : model.nodeInputs()) {
     if (n.driveRate)
-      t.add(n.node + ".drive_rate", Causality::Input, Variability::Continuous, "rad/s",
-            "rotation rate of the driven support about its axis", {QK::FlexibleInput, n.offset}, 0.0);
+      t.input(n.node + ".drive_rate", "rad/s", "rotation rate of the driven support about its axis",
+              {QK::FlexibleInput, n.offset});
     else
       wrenchInputs(t, n.node, "moment", "nodal", n.follower ? "node frame" : "world", QK::FlexibleInput, n.offset);
   }

@@ -9,8 +9,8 @@
 #include <Eigen/QR>
 
 #include "integrator/constraint_rank.hpp"
+#include "math/number_text.hpp"
 #include "rigid/recursive_dynamics.hpp"
-#include "scene/number_text.hpp"
 #include "simulation.hpp"
 
 namespace mfbd {

@@ -17,14 +17,14 @@ namespace mfbd {
 // Not automatically with cut joints: their multipliers couple every body
 // between the loop's ends in the elimination (R3's 40 loops).
 bool System::chooseRecursiveNewtonMatrix() const {
-  using Form = SolverOptions::NewtonMatrix;
+  using Form = SolverSection::NewtonMatrix;
   bool cutJoints = false;
   for (const Joint& j : model_.joints) cutJoints = cutJoints || j.cut;
   const int coupled = int(ratesCoupled_.count());
-  const int dense = SolverOptions::kRecursiveNewtonMatrixRates * SolverOptions::kRecursiveNewtonMatrixRates;
+  const int dense = SolverSection::kRecursiveNewtonMatrixRates * SolverSection::kRecursiveNewtonMatrixRates;
   return model_.analysis == Analysis::Dynamic && !model_.bodies.empty() &&
-         (model_.solver.newtonMatrix == Form::Recursive ||
-          (model_.solver.newtonMatrix == Form::Automatic && !cutJoints && coupled >= dense));
+         (model_.newtonMatrix == Form::Recursive ||
+          (model_.newtonMatrix == Form::Automatic && !cutJoints && coupled >= dense));
 }
 
 int System::auxiliaryCount(double cM) const {

@@ -12,8 +12,9 @@
 #include "initial_equilibrium.hpp"
 #include "integrator/static_equilibrium.hpp"
 #include "rigid/force_elements.hpp"
+#include "rigid/mass_check.hpp"
 #include "rigid/recursive_dynamics.hpp"
-#include "scene/number_text.hpp"
+#include "math/number_text.hpp"
 
 namespace mfbd {
 
@@ -66,17 +67,36 @@ double lengthScale(const Scene& scene) {
   return std::max({1e-3, (high - low).norm(), gyration});
 }
 
-SolverOptions solverOptions(const Scene& scene) {
-  SolverOptions options = scene.solver;
+// The integrator's options: the scene's solver section, the FMI tolerance
+// and the scene's length scale as the error's scale.
+SolverOptions solverOptions(const Scene& scene, double errorTolerance) {
+  const SolverSection& s = scene.solver;
+  SolverOptions options;
+  options.hMax = s.hMax;
+  options.hMin = s.hMin;
+  options.rhoInf = s.rhoInf;
+  options.maxSubsteps = s.maxSubsteps;
+  options.tolerance = s.tolerance;
+  options.maxIterations = s.maxIterations;
+  options.errorTolerance = errorTolerance;
   options.errorScale = lengthScale(scene);
   return options;
 }
+
+// The Model, refused (SceneError) when its rigid tree has a motion that
+// moves no mass and that nothing holds (rigid/mass_check.hpp).
+Model assembleChecked(const Scene& scene) {
+  Model model = assemble(scene);
+  checkMassMatrix(scene, model);
+  return model;
+}
 }  // namespace
 
-Simulation::Simulation(const Scene& scene)
-    : scene_(scene), system_(assemble(scene)) {
-  if (scene.analysis == Analysis::Static) stepper_ = std::make_unique<StaticEquilibrium>(solverOptions(scene));
-  else stepper_ = std::make_unique<GeneralizedAlpha>(solverOptions(scene));
+Simulation::Simulation(const Scene& scene, double errorTolerance)
+    : scene_(scene), system_(assembleChecked(scene)) {
+  const SolverOptions options = solverOptions(scene, errorTolerance);
+  if (scene.analysis == Analysis::Static) stepper_ = std::make_unique<StaticEquilibrium>(options);
+  else stepper_ = std::make_unique<GeneralizedAlpha>(options);
   const Model& model = system_.model();
   for (const BodySpec& b : scene.bodies) bodyIndex_.push_back(findBody(model, b.name));
   for (const JointSpec& j : scene.joints) jointIndex_.push_back(findJoint(model, j.name));
@@ -118,7 +138,7 @@ bool Simulation::initialize(double t0, std::string& message, std::vector<std::st
 bool Simulation::startFromEquilibrium(std::string& message, std::vector<std::string>* notes) {
   if (!scene_.solver.initialEquilibrium || scene_.analysis != Analysis::Dynamic) return true;
   InitialEquilibriumReport report;
-  if (!solveInitialEquilibrium(system_, state_, scene_.solver, report, message)) return false;
+  if (!solveInitialEquilibrium(system_, state_, stepper_->options(), report, message)) return false;
   if (notes) notes->push_back(report.describe(system_));
   return startIntegrator(message);
 }

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "integrator/time_stepper.hpp"
+#include "model/model_numbering.hpp"
 #include "system.hpp"
 
 namespace mfbd {
@@ -56,7 +57,9 @@ double sceneParameter(const Scene& scene, const Quantity& q);
 
 class Simulation {
  public:
-  explicit Simulation(const Scene& scene);  // throws SceneError
+  // errorTolerance: the FMI tolerance (fmi2SetupExperiment), 0: no error
+  // control. Throws SceneError.
+  explicit Simulation(const Scene& scene, double errorTolerance = 0.0);
 
   // Assembles closed loops and drives at time t0 (positions, then
   // velocities, projected onto the constraints by least change), then
@@ -83,6 +86,9 @@ class Simulation {
   double time() const { return state_.t; }
   const IntegratorState& state() const { return state_; }
   const System& system() const { return system_; }
+  // The numbers assembly gave (inputs, nodes, elements): what the variable
+  // table reads of the assembled model.
+  ModelNumbering numbering() const { return ModelNumbering(system_.model()); }
 
   double read(const Quantity& q);
   // Inputs and tunable parameters; false if q is neither. An input's value

@@ -5,8 +5,8 @@
 #pragma once
 #include "flex/flexible_mesh.hpp"
 #include "integrator/dynamics.hpp"
+#include "math/input_signals.hpp"
 #include "model/data.hpp"
-#include "model/input_signals.hpp"
 #include "rigid/recursive_dynamics.hpp"
 #include "two_marker_constraints.hpp"
 
@@ -120,7 +120,7 @@ class System : public Dynamics {
   void jointBlocks(int i, const BiasRateDerivatives& D, const VectorXd& v, double cC, double cK, Configuration& moved,
                    Triplets& iteration) const;
   void forceElementTangent(double t, double cC, double cK, Triplets& iteration);
-  // Constraint rows: two-marker constraints and drives (two_marker_constraints.cpp).
+  // Constraint rows: two-marker constraints and drives (constraint_rows.cpp).
   SideColumns columnsOf(const ConstraintSide& side, bool bodyColumns) const;
   Eigen::MatrixXd rowsOn(const ConstraintSide& side, const SideColumns& columns, const ConstraintJacobian& J,
                          bool bodyColumns) const;

@@ -15,8 +15,9 @@
 #include <vector>
 
 #include "flex/corotational_beam.hpp"
-#include "integrator/dynamics.hpp"
-#include "model/input_signals.hpp"
+#include "math/configuration.hpp"
+#include "math/input_signals.hpp"
+#include "math/triplets.hpp"
 #include "scene/scene.hpp"
 
 namespace mfbd {

@@ -6,13 +6,10 @@
 #pragma once
 #include <vector>
 
-#include <Eigen/SparseCore>
-
-#include "model/configuration.hpp"
+#include "math/configuration.hpp"
+#include "math/triplets.hpp"
 
 namespace mfbd {
-
-using Triplets = std::vector<Eigen::Triplet<double>>;
 
 class Dynamics {
  public:

@@ -7,7 +7,7 @@
 
 #include <Eigen/SparseCore>
 
-#include "model/state_archive.hpp"
+#include "math/state_archive.hpp"
 
 namespace mfbd {
 

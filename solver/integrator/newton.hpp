@@ -6,7 +6,7 @@
 #pragma once
 #include <string>
 
-#include "model/configuration.hpp"
+#include "math/configuration.hpp"
 
 namespace mfbd {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "scene/number_text.hpp"
+#include "math/number_text.hpp"
 
 namespace mfbd {
 

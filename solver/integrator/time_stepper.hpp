@@ -7,7 +7,7 @@
 
 #include "integrator/dynamics.hpp"
 #include "integrator/linear_solver.hpp"
-#include "scene/scene.hpp"
+#include "integrator/solver_options.hpp"
 
 namespace mfbd {
 

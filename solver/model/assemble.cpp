@@ -5,7 +5,6 @@
 #include <map>
 
 #include "coupling/joint_constraint.hpp"
-#include "model/mass_check.hpp"
 #include "model/model.hpp"
 #include "scene/joint_dofs.hpp"
 
@@ -74,18 +73,21 @@ void layOutCoordinates(Model& model, Joint& joint, const JointSpec& spec) {
   }
 }
 
-}  // namespace
+// Where the bodies are while assembly places markers on them: model index
+// by name and solver (centre-of-mass) frames in the design configuration.
+struct Placement {
+  std::map<std::string, int> bodyIndex;
+  std::vector<WorldFrame> design;
 
-Model assemble(const Scene& scene) {
-  Model model;
-  model.name = scene.name;
-  model.gravity = scene.gravity;
-  model.solver = scene.solver;
+  int indexOf(const std::string& name) const { return name == kGround ? kGroundIndex : bodyIndex.at(name); }
+  WorldFrame frameOf(int body) const {
+    return body == kGroundIndex ? WorldFrame{Vec3::Zero(), Mat3::Identity()} : design[body];
+  }
+  Marker marker(int body, const WorldFrame& frame) const { return markerOn(body, frameOf(body), frame); }
+};
 
-  std::map<std::string, int> sceneBodyIndex;
-  const std::vector<int> order = treeOrder(scene, sceneBodyIndex);
-  std::map<std::string, int> bodyIndex;  // name -> model index
-  std::vector<WorldFrame> design;        // solver (centre-of-mass) frames in the design configuration
+// The bodies in tree order (parent < child).
+void addBodies(const Scene& scene, const std::vector<int>& order, Model& model, Placement& at) {
   for (int k = 0; k < int(order.size()); ++k) {
     const BodySpec& spec = scene.bodies[order[k]];
     Body b;
@@ -94,40 +96,39 @@ Model assemble(const Scene& scene) {
     b.mass = spec.mass;
     b.inertia = spec.inertia;
     b.centerOfMass = spec.centerOfMass;
-    bodyIndex[spec.name] = k;
-    design.push_back({spec.position + spec.orientation * spec.centerOfMass, spec.orientation});
+    at.bodyIndex[spec.name] = k;
+    at.design.push_back({spec.position + spec.orientation * spec.centerOfMass, spec.orientation});
     model.bodies.push_back(b);
   }
-  const WorldFrame groundFrame{Vec3::Zero(), Mat3::Identity()};
-  auto indexOf = [&](const std::string& name) { return name == kGround ? kGroundIndex : bodyIndex.at(name); };
-  auto frameOf = [&](int body) { return body == kGroundIndex ? groundFrame : design[body]; };
+}
 
-  // Tree joints in body order (so joint k's child is body k), cut joints after.
-  std::vector<int> jointOrder(order.size(), -1);
+// A joint's markers: its design frame fixed in the parent and in the child.
+Joint jointOf(const JointSpec& spec, const Placement& at) {
+  Joint j;
+  j.name = spec.name;
+  j.type = spec.type;
+  j.dofs = int(jointDofs(spec.type));
+  j.cut = spec.cut;
+  j.actuated = spec.torqueInput;
+  j.keepRates = spec.keepRates;
+  j.damping = spec.damping;
+  const WorldFrame jointFrame{spec.position, spec.frame};
+  j.parentMarker = at.marker(at.indexOf(spec.parent), jointFrame);
+  j.childMarker = at.marker(at.indexOf(spec.child), jointFrame);
+  return j;
+}
+
+// Tree joints in body order (so joint k's child is body k), cut joints after.
+void addJoints(const Scene& scene, Model& model, const Placement& at) {
+  std::vector<int> jointOrder(model.bodies.size(), -1);
   std::vector<int> cutJoints;
   for (int i = 0; i < int(scene.joints.size()); ++i) {
     if (scene.joints[i].cut) cutJoints.push_back(i);
-    else jointOrder[bodyIndex.at(scene.joints[i].child)] = i;
+    else jointOrder[at.bodyIndex.at(scene.joints[i].child)] = i;
   }
-  // A joint's markers: its design frame fixed in the parent and in the child.
-  auto jointOf = [&](const JointSpec& spec) {
-    Joint j;
-    j.name = spec.name;
-    j.type = spec.type;
-    j.dofs = int(jointDofs(spec.type));
-    j.cut = spec.cut;
-    j.actuated = spec.torqueInput;
-    j.keepRates = spec.keepRates;
-    j.damping = spec.damping;
-    const WorldFrame jointFrame{spec.position, spec.frame};
-    const int parent = indexOf(spec.parent), child = indexOf(spec.child);
-    j.parentMarker = markerOn(parent, frameOf(parent), jointFrame);
-    j.childMarker = markerOn(child, frameOf(child), jointFrame);
-    return j;
-  };
   for (int sceneIndex : jointOrder) {
     const JointSpec& spec = scene.joints[sceneIndex];
-    Joint j = jointOf(spec);
+    Joint j = jointOf(spec, at);
     const int parent = j.parentMarker.body, child = j.childMarker.body;
     layOutCoordinates(model, j, spec);
     if (spec.driven) {
@@ -144,12 +145,16 @@ Model assemble(const Scene& scene) {
   // Cut joints close loops: constraint rows with Lagrange multipliers.
   for (int sceneIndex : cutJoints) {
     const JointSpec& spec = scene.joints[sceneIndex];
-    Joint j = jointOf(spec);
+    Joint j = jointOf(spec, at);
     j.constraintOffset = model.constraintCount;
     model.constraintCount += constraintCount(spec.type);
     model.joints.push_back(j);
   }
-  // Force elements: their points become markers on the bodies.
+}
+
+// Force elements: their points become markers on the bodies; a rotational
+// spring-damper sits on its joint.
+void addForceElements(const Scene& scene, Model& model, const Placement& at) {
   for (const ForceSpec& f : scene.forces) {
     if (f.kind == ForceSpec::Kind::RotationalSpringDamper) {
       Joint& j = model.joints[findJoint(model, f.joint)];
@@ -160,9 +165,10 @@ Model assemble(const Scene& scene) {
     }
     ForceElement e;
     e.name = f.name;
-    const int b1 = indexOf(f.body1), b2 = f.kind == ForceSpec::Kind::AppliedForce ? kGroundIndex : indexOf(f.body2);
-    e.marker1 = markerOn(b1, frameOf(b1), {f.point1, f.orientation});
-    e.marker2 = markerOn(b2, frameOf(b2), {f.point2, f.orientation});
+    const int b1 = at.indexOf(f.body1);
+    const int b2 = f.kind == ForceSpec::Kind::AppliedForce ? kGroundIndex : at.indexOf(f.body2);
+    e.marker1 = at.marker(b1, {f.point1, f.orientation});
+    e.marker2 = at.marker(b2, {f.point2, f.orientation});
     switch (f.kind) {
       case ForceSpec::Kind::SpringDamper:
         e.kind = ForceElement::Kind::SpringDamper;
@@ -189,18 +195,17 @@ Model assemble(const Scene& scene) {
     }
     model.forces.push_back(e);
   }
-  model.rigidVelocityCount = model.velocityCount;
-  model.analysis = scene.analysis;
-  assembleFlexibleBodies(scene, model.flexible, model.blocks, model.initialConfiguration, model.initialVelocity,
-                         model.velocityCount);
-  // Flexible body joints: the virtual body's design frame, fixed in the node's.
+}
+
+// Flexible body joints: the virtual body's design frame, fixed in the node's.
+void addFlexibleBodyJoints(const Scene& scene, Model& model, const Placement& at) {
   for (const FlexibleBodyJointSpec& spec : scene.flexibleBodyJoints) {
     FlexibleBodyJoint w;
     w.name = spec.name;
-    w.virtualBody = bodyIndex.at(spec.virtualBody);
+    w.virtualBody = at.bodyIndex.at(spec.virtualBody);
     w.node = model.flexible.bodies[spec.flexibleBody].firstNode + spec.node;
     const NodePose& node = model.flexible.nodes[w.node].reference;
-    const WorldFrame& body = design[w.virtualBody];
+    const WorldFrame& body = at.design[w.virtualBody];
     w.joint.type = JointType::Fixed;
     w.joint.parentMarker = {node.A.transpose() * (body.origin - node.r), node.A.transpose() * body.orientation};
     w.joint.childMarker = {Vec3::Zero(), Mat3::Identity()};
@@ -208,7 +213,25 @@ Model assemble(const Scene& scene) {
     model.constraintCount += 6;
     model.flexibleBodyJoints.push_back(w);
   }
-  checkMassMatrix(scene, model);
+}
+
+}  // namespace
+
+Model assemble(const Scene& scene) {
+  Model model;
+  model.name = scene.name;
+  model.gravity = scene.gravity;
+  model.newtonMatrix = scene.solver.newtonMatrix;
+  std::map<std::string, int> sceneBodyIndex;
+  Placement at;
+  addBodies(scene, treeOrder(scene, sceneBodyIndex), model, at);
+  addJoints(scene, model, at);
+  addForceElements(scene, model, at);
+  model.rigidVelocityCount = model.velocityCount;
+  model.analysis = scene.analysis;
+  assembleFlexibleBodies(scene, model.flexible, model.blocks, model.initialConfiguration, model.initialVelocity,
+                         model.velocityCount);
+  addFlexibleBodyJoints(scene, model, at);
   return model;
 }
 

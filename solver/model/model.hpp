@@ -8,7 +8,7 @@
 
 #include "coupling/flexible_body_joint.hpp"
 #include "flex/flexible_mesh.hpp"
-#include "model/configuration.hpp"
+#include "math/configuration.hpp"
 #include "scene/scene.hpp"
 
 namespace mfbd {
@@ -75,7 +75,7 @@ struct Model {
   std::vector<Body> bodies;     // topological order
   std::vector<Joint> joints;    // tree joints (joints[bodies[i].inboardJoint]) and cut joints
   Vec3 gravity = Vec3::Zero();
-  SolverOptions solver;
+  SolverSection::NewtonMatrix newtonMatrix = SolverSection::NewtonMatrix::Automatic;  // the System's form
   FlexibleMesh flexible;        // nodes, beam elements, supports, loads, drives
   std::vector<ForceElement> forces;  // between markers on bodies
   std::vector<FlexibleBodyJoint> flexibleBodyJoints;  // virtual body <-> flexible node welds

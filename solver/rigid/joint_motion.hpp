@@ -11,7 +11,7 @@
 #pragma once
 #include <Eigen/Core>
 
-#include "model/configuration.hpp"
+#include "math/configuration.hpp"
 #include "scene/scene.hpp"
 
 namespace mfbd {

@@ -12,10 +12,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "math/number_text.hpp"
 #include "scene/expression.hpp"
-#include "scene/number_text.hpp"
-#include "scene/time_function.hpp"
 #include "scene/scene.hpp"
+#include "scene/time_function.hpp"
 
 namespace mfbd {
 

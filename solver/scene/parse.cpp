@@ -212,10 +212,10 @@ JointSpec parseJoint(const Field& f) {
   return jt;
 }
 
-SolverOptions parseSolver(const Field& f) {
+SolverSection parseSolver(const Field& f) {
   f.expectObject({"h_max", "h_min", "rho_inf", "tolerance", "max_iterations", "initial_equilibrium", "newton_matrix"},
                  {});
-  SolverOptions s;
+  SolverSection s;
   if (f.has("h_max")) s.hMax = f.at("h_max").positive();
   if (f.has("h_min")) s.hMin = f.at("h_min").positive();
   if (s.hMin > s.hMax) f.at("h_min").fail("expected h_min <= h_max");
@@ -228,9 +228,9 @@ SolverOptions parseSolver(const Field& f) {
   if (f.has("initial_equilibrium")) s.initialEquilibrium = f.at("initial_equilibrium").boolean();
   if (f.has("newton_matrix")) {
     const std::string form = f.at("newton_matrix").string();
-    if (form == "automatic") s.newtonMatrix = SolverOptions::NewtonMatrix::Automatic;
-    else if (form == "joint_space") s.newtonMatrix = SolverOptions::NewtonMatrix::JointSpace;
-    else if (form == "recursive") s.newtonMatrix = SolverOptions::NewtonMatrix::Recursive;
+    if (form == "automatic") s.newtonMatrix = SolverSection::NewtonMatrix::Automatic;
+    else if (form == "joint_space") s.newtonMatrix = SolverSection::NewtonMatrix::JointSpace;
+    else if (form == "recursive") s.newtonMatrix = SolverSection::NewtonMatrix::Recursive;
     else f.at("newton_matrix").fail("expected \"automatic\", \"joint_space\" or \"recursive\"");
   }
   return s;

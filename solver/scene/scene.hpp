@@ -198,25 +198,18 @@ struct ForceSpec {
 
 enum class Analysis { Dynamic, Static };
 
-struct SolverOptions {
+// The scene's "solver" section as written (defaults where it is silent),
+// and the FMU parameters solver.* that overwrite it. The integrator's own
+// options (integrator/solver_options.hpp) are made from it by the
+// Simulation, which adds what no scene says (the FMI tolerance, the
+// scene's length scale); the Newton matrix's form goes to the System.
+struct SolverSection {
   double hMax = 1e-3;       // largest implicit substep, s
   double hMin = 1e-9;       // smallest substep before a step is discarded, s
   double rhoInf = 0.8;      // generalized-alpha spectral radius at infinity
-  // Substeps (tried, rejected ones included) one communication step may
-  // take: the bound on the work of one fmi2DoStep.
-  double maxSubsteps = 1e5;
-  // Newton: the position error left after the last correction (m, rad).
-  // Truncation errors of Newton accumulate over many steps as a drift (energy
-  // of a conservative system), so the default is near round-off.
-  double tolerance = 1e-14;
+  double maxSubsteps = 1e5; // substeps one communication step may take
+  double tolerance = 1e-14; // Newton: position error left (m, rad)
   int maxIterations = 12;
-  // Error control (the FMI tolerance, fmi2SetupExperiment): each substep's
-  // local error, estimated in the position coordinates, at most
-  // errorTolerance * errorScale (m; rad against errorScale / 1 m); 0: no
-  // control, substeps of h_max. errorScale is the scene's length scale
-  // (Simulation sets it).
-  double errorTolerance = 0.0;
-  double errorScale = 1.0;
   // Dynamics starts from the static equilibrium under gravity and loads at
   // the start time (solved at fmi2ExitInitializationMode), at rest.
   bool initialEquilibrium = false;
@@ -260,7 +253,7 @@ struct Scene {
   std::string description;
   std::vector<ParameterSpec> parameters;
   Vec3 gravity = Vec3::Zero();
-  SolverOptions solver;
+  SolverSection solver;
   Experiment experiment;
   std::vector<BodySpec> bodies;
   std::vector<JointSpec> joints;

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "scene/number_text.hpp"
+#include "math/number_text.hpp"
 
 namespace mfbd {
 

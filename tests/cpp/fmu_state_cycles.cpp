@@ -3,47 +3,29 @@
 // a serialize / deserialize round trip, and a step every 100 cycles, for
 // leak checking under valgrind (tests/python/test_fmu_state.py).
 // usage: fmu_state_cycles BINARY.so RESOURCE_URI GUID CYCLES
-#include <dlfcn.h>
-
-#include <cstdio>
-#include <cstdlib>
 #include <vector>
 
-#include "fmi2Functions.h"
+#include "fmu_binary.hpp"
 
 static void logger(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String, fmi2String message, ...) {
   std::fprintf(stderr, "%s\n", message);
 }
 
 int main(int argc, char** argv) {
-  if (argc != 5) {
-    std::fprintf(stderr, "usage: %s BINARY.so RESOURCE_URI GUID CYCLES\n", argv[0]);
-    return 2;
-  }
-  void* lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-  if (!lib) {
-    std::fprintf(stderr, "dlopen: %s\n", dlerror());
-    return 2;
-  }
-#define LOAD(name) auto name = reinterpret_cast<name##TYPE*>(dlsym(lib, #name))
-  LOAD(fmi2Instantiate);
-  LOAD(fmi2SetupExperiment);
-  LOAD(fmi2EnterInitializationMode);
-  LOAD(fmi2ExitInitializationMode);
-  LOAD(fmi2DoStep);
-  LOAD(fmi2GetFMUstate);
-  LOAD(fmi2SetFMUstate);
-  LOAD(fmi2FreeFMUstate);
-  LOAD(fmi2SerializedFMUstateSize);
-  LOAD(fmi2SerializeFMUstate);
-  LOAD(fmi2DeSerializeFMUstate);
-  LOAD(fmi2FreeInstance);
-#undef LOAD
+  FmuBinary fmu;
+  if (!fmu.open(argc, argv)) return 2;
+  FMU_FUNCTION(fmu, fmi2DoStep);
+  FMU_FUNCTION(fmu, fmi2GetFMUstate);
+  FMU_FUNCTION(fmu, fmi2SetFMUstate);
+  FMU_FUNCTION(fmu, fmi2FreeFMUstate);
+  FMU_FUNCTION(fmu, fmi2SerializedFMUstateSize);
+  FMU_FUNCTION(fmu, fmi2SerializeFMUstate);
+  FMU_FUNCTION(fmu, fmi2DeSerializeFMUstate);
+  FMU_FUNCTION(fmu, fmi2FreeInstance);
   const fmi2CallbackFunctions callbacks = {logger, nullptr, nullptr, nullptr, nullptr};
-  const int cycles = std::atoi(argv[4]);
-  fmi2Component c = fmi2Instantiate("cycle", fmi2CoSimulation, argv[3], argv[2], &callbacks, fmi2False, fmi2False);
-  if (!c || fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK ||
-      fmi2EnterInitializationMode(c) != fmi2OK || fmi2ExitInitializationMode(c) != fmi2OK) {
+  const int cycles = fmu.cycles;
+  fmi2Component c = fmu.instantiate(callbacks);
+  if (!c || !fmu.initialize(c)) {
     std::fprintf(stderr, "initialization failed\n");
     return 1;
   }
@@ -75,7 +57,6 @@ int main(int argc, char** argv) {
   fmi2FMUstate left = nullptr;
   if (fmi2GetFMUstate(c, &left) != fmi2OK) return 1;
   fmi2FreeInstance(c);
-  dlclose(lib);
   std::printf("%d cycles\n", cycles);
   return 0;
 }

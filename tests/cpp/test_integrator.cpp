@@ -249,10 +249,12 @@ TEST(GeneralizedAlpha, RestoredStateAndNewtonMemoryReplayBitForBit) {
   // predictor's history and the substep size) and the NewtonMemory (the
   // refresh policy and the origin of the kept matrix). A second integrator
   // given both continues exactly as the first, kept matrix included.
-  Scene scene = doublePendulum(1e-3);
-  scene.solver.rhoInf = 0.8;
+  const Scene scene = doublePendulum(1e-3);
+  SolverOptions options;
+  options.hMax = scene.solver.hMax;
+  options.rhoInf = 0.8;
   System first(assemble(scene)), second(assemble(scene));
-  GeneralizedAlpha a(scene.solver), b(scene.solver);
+  GeneralizedAlpha a(options), b(options);
   IntegratorState s;
   s.q = first.model().initialConfiguration;
   s.v = first.model().initialVelocity;

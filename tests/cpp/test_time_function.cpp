@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "scene/number_text.hpp"
+#include "math/number_text.hpp"
 #include "scene/time_function.hpp"
 
 using namespace mfbd;

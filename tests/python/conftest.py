@@ -84,6 +84,10 @@ class Slave:
         except FMICallException as e:
             return e.status
 
+    def refuses(self, message, function, *args):
+        """Whether the call returns fmi2Error and the log then holds `message`."""
+        return self.call(function, *args) == ERROR and message in self.messages()
+
     def start(self, start_values=None, start_time=0.0, stop_time=None, tolerance=None):
         assert self.instantiate(), self.messages()
         assert self.call("setupExperiment", tolerance, start_time, stop_time) == OK, self.messages()

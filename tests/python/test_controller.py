@@ -4,7 +4,6 @@ checks as the plant FMUs (fmpy validation, linux64 and win64 binaries, the
 win64 DLL under Wine against the linux64 binary)."""
 import math
 import re
-import shutil
 import subprocess
 import sys
 import zipfile
@@ -15,7 +14,7 @@ from fmpy import extract, read_model_description
 from fmpy.validation import validate_fmu
 
 from conftest import BUILD, ERROR, OK, ROOT, Slave
-from test_memory import run_cycles
+from leak_check import INSTANCE_CYCLES, assert_cycles_leak_nothing, needs_valgrind
 from test_platforms import (LINUX_SYSTEM, MASTER, MASTER_EXE, WINDOWS_SYSTEM, pe_imports, run_master,  # noqa: F401
                             version_needs, windows_path, wine)
 
@@ -230,12 +229,6 @@ def test_packer_refuses_bad_arguments(tmp_path):
     assert result.returncode == 1 and "has no pid_controller binary" in result.stderr
 
 
-@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind is installed by scripts/setup.sh")
+@needs_valgrind
 def test_controller_instantiate_free_cycles_leak_nothing(tmp_path):
-    unzip = extract(str(PID2), str(tmp_path))
-    few, few_in_use = run_cycles(PID2, unzip, 10)
-    many, many_in_use = run_cycles(PID2, unzip, 300)
-    for r in (few, many):
-        assert r.returncode == 0, r.stderr[-3000:]
-        assert "ERROR SUMMARY: 0 errors" in r.stderr
-    assert many_in_use == few_in_use
+    assert_cycles_leak_nothing(INSTANCE_CYCLES, PID2, tmp_path, 10, 300)

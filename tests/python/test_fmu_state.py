@@ -4,20 +4,16 @@ what is not a state of this FMU is refused with a message and changes
 nothing, and 10,000 get/set/free cycles leak nothing (valgrind)."""
 import ctypes
 import pathlib
-import re
-import shutil
 import subprocess
 import sys
 import zlib
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description
 
-from conftest import BUILD, ERROR, FMUS, OK, Slave
+from conftest import ERROR, FMUS, OK, Slave
+from leak_check import STATE_CYCLES, assert_cycles_leak_nothing, needs_valgrind
 
-HARNESS = BUILD / "tests" / "cpp" / "fmu_state_cycles"
-SUPPRESSIONS = pathlib.Path(__file__).with_name("ld_so.supp")
 H = 0.01
 
 
@@ -192,25 +188,6 @@ def test_state_calls_follow_the_state_machine(tmp_path):
         s.free()
 
 
-@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind is installed by scripts/setup.sh")
+@needs_valgrind
 def test_ten_thousand_get_set_free_cycles_leak_nothing(tmp_path):
-    fmu = FMUS / "pendulum.fmu"
-    unzip = extract(str(fmu), str(tmp_path))
-    md = read_model_description(str(fmu))
-    binary = pathlib.Path(unzip) / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so"
-
-    def cycles(n):
-        r = subprocess.run(["valgrind", "--leak-check=full", "--errors-for-leak-kinds=definite,indirect,possible",
-                            f"--suppressions={SUPPRESSIONS}", "--error-exitcode=99", str(HARNESS), str(binary),
-                            (pathlib.Path(unzip) / "resources").as_uri(), md.guid, str(n)],
-                           capture_output=True, text=True)
-        in_use = re.search(r"in use at exit: ([\d,]+) bytes", r.stderr)
-        return r, int(in_use.group(1).replace(",", "")) if in_use else 0
-
-    few, few_in_use = cycles(100)
-    many, many_in_use = cycles(10000)
-    for r in (few, many):
-        assert r.returncode == 0, r.stderr[-3000:]
-        assert "ERROR SUMMARY: 0 errors" in r.stderr
-    assert "10000 cycles" in many.stdout
-    assert many_in_use == few_in_use
+    assert_cycles_leak_nothing(STATE_CYCLES, FMUS / "pendulum.fmu", tmp_path, 100, 10000)

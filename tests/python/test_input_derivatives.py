@@ -22,6 +22,20 @@ def run_steps(s, steps, before_step, outputs):
     return np.array(rows)
 
 
+def pendulum_runs(befores, outputs):
+    """The pendulum over 10 steps, once for each `before_step` (the master's
+    calls before each step): the outputs after each step, one array a run."""
+    results = []
+    for before in befores:
+        s = Slave(FMUS / "pendulum.fmu")
+        try:
+            s.start()
+            results.append(run_steps(s, 10, before, outputs))
+        finally:
+            s.free()
+    return results
+
+
 def derivatives(s, name, values):
     vr = s.vr[name]
     assert s.call("setRealInputDerivatives", [vr] * len(values), list(range(1, len(values) + 1)), values) == OK, \
@@ -115,14 +129,7 @@ def test_refused_derivatives_name_the_variable_and_change_nothing():
             status = s.call("setRealInputDerivatives", [torque, vr], [1, order], [7.0, value])
             assert status == ERROR and message in s.log[-1][2], s.log[-1][2]
 
-    results = []
-    for before in (plain, with_refusals):
-        s = Slave(FMUS / "pendulum.fmu")
-        try:
-            s.start()
-            results.append(run_steps(s, 10, before, outputs))
-        finally:
-            s.free()
+    results = pendulum_runs((plain, with_refusals), outputs)
     assert np.array_equal(results[0], results[1])
 
 
@@ -141,13 +148,6 @@ def test_setting_the_value_again_restarts_the_derivatives_at_zero():
         assert s.set("hinge.torque", 0.5) == OK
         derivatives(s, "hinge.torque", [30.0])
 
-    results = []
-    for before in (value_only, derivative_then_value, derivative):
-        s = Slave(FMUS / "pendulum.fmu")
-        try:
-            s.start()
-            results.append(run_steps(s, 10, before, outputs))
-        finally:
-            s.free()
+    results = pendulum_runs((value_only, derivative_then_value, derivative), outputs)
     assert np.array_equal(results[0], results[1])
     assert not np.allclose(results[0], results[2], rtol=1e-6, atol=0)  # the derivative did act

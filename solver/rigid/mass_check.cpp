@@ -8,16 +8,16 @@
 // not move in x (their own mass is not checked here). A massless motion
 // that a constraint touches is left to the solver, since the constraint may
 // hold it: the massless slider of flexible_slider_crank is legitimate.
-#include "model/mass_check.hpp"
+#include "rigid/mass_check.hpp"
 
 #include <algorithm>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "math/number_text.hpp"
 #include "model/data.hpp"
 #include "rigid/recursive_dynamics.hpp"
-#include "scene/number_text.hpp"
 
 namespace mfbd {
 

@@ -1,4 +1,4 @@
-#include "model/configuration.hpp"
+#include "math/configuration.hpp"
 
 namespace mfbd {
 

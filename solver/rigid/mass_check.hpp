@@ -1,8 +1,10 @@
 // A scene whose rigid tree has a motion that moves no mass and that no
 // constraint holds cannot start: the mass matrix at the initial
-// configuration is singular. Checked when the Model is assembled, so the
-// packer, fmi2Instantiate and fmi2SetReal of a user parameter refuse such
-// a scene with the joint's JSON path instead of failing at initialization.
+// configuration is singular. Checked right after assembly, when a
+// Simulation is built (it needs the tree's recursions, so not in
+// assemble()); the packer, fmi2Instantiate and fmi2SetReal of a user
+// parameter all build one, so they refuse such a scene with the joint's
+// JSON path instead of failing at initialization.
 #pragma once
 #include "model/model.hpp"
 
