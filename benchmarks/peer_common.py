@@ -61,12 +61,14 @@ class FmuRun:
     callback into Python at every step). The Newton tolerance is
     NEWTON_TOLERANCE (Exudyn's) unless `parameters` sets solver.tolerance."""
 
-    def __init__(self, fmu, parameters=None):
-        parameters = {"solver.tolerance": NEWTON_TOLERANCE, **(parameters or {})}
+    def __init__(self, fmu, parameters=None, tolerance=None):
+        # Driven by an error tolerance (fmi2SetupExperiment), the Newton
+        # tolerance follows it (README, Error control) unless set here.
+        parameters = {**({} if tolerance else {"solver.tolerance": NEWTON_TOLERANCE}), **(parameters or {})}
         self.slave = Slave(fmu)
         assert self.slave.instantiate(logging_on=True), self.slave.messages()
         self.slave.call("setDebugLogging", True, ["logStatistics"])
-        assert self.slave.call("setupExperiment", None, 0.0, None) == 0
+        assert self.slave.call("setupExperiment", tolerance, 0.0, None) == 0
         for name, value in parameters.items():
             assert self.slave.set(name, value) == 0, self.slave.messages()
         self.t = 0.0
@@ -231,12 +233,32 @@ def exudyn_solve(mbs, settings, static=False):
     factorizations=)), factorizations being Exudyn's Jacobian computations
     (each one factorised)."""
     start = time.perf_counter()
-    ok = mbs.SolveStatic(settings) if static else mbs.SolveDynamic(settings)
+    ok = (mbs.SolveStatic(settings) if static
+          else mbs.SolveDynamic(settings, solverType=settings.timeIntegration.solverType))
     wall = time.perf_counter() - start
     assert ok, "Exudyn solver failed"
     it = mbs.sys["staticSolver" if static else "dynamicSolver"].it
     return wall, dict(steps=int(it.currentStepIndex), newton_iterations=int(it.newtonStepsCount),
                       factorizations=int(it.newtonJacobiCount))
+
+
+EXPLICIT_SOLVERS = ("RK44", "DOPRI5", "ODE23")
+
+
+def exudyn_explicit_settings(solver, end_time, h=None, tolerance=None, sensor_period=None):
+    """Exudyn SimulationSettings for one of its explicit solvers: fixed steps
+    h (RK44), or step-size control to a relative and absolute tolerance
+    (DOPRI5, ODE23: automaticStepSize, the initial step Exudyn's own)."""
+    import exudyn as exu
+
+    s = exudyn_settings(end_time=end_time, h=h or end_time / 100, sensor_period=sensor_period)
+    t = s.timeIntegration
+    t.solverType = getattr(exu.DynamicSolverType, solver)
+    t.automaticStepSize = tolerance is not None
+    if tolerance is not None:
+        t.relativeTolerance = tolerance
+        t.absoluteTolerance = tolerance
+    return s
 
 
 def exudyn_beam_line_2d(mbs, n, length, mass_per_length, rotary_inertia, EI, EA, GA, start=0.0):
@@ -375,7 +397,8 @@ def plot_precision_work(ax, rows, error_key="error", annotate="h_or_elements", f
     `annotate` (a column, or a function of the row; open unlabelled markers:
     runs a cheaper run of the same series beats, their settings in the
     CSV), the legend below the axes where it hides no point."""
-    palette = {OURS: [("C0", "o"), ("C9", "v")], EXUDYN: [("C3", "s"), ("C2", "^"), ("C1", "D")]}
+    palette = {OURS: [("C0", "o"), ("C9", "v"), ("C4", "P")],
+               EXUDYN: [("C3", "s"), ("C2", "^"), ("C1", "D"), ("C5", "X"), ("C6", "<"), ("C8", ">")]}
     labels = list(dict.fromkeys(series_label(r) for r in rows))
     for label in labels:
         sel = [r for r in rows if series_label(r) == label and r.get(error_key) not in (None, "")]
@@ -429,15 +452,17 @@ STATISTICS = ("steps", "newton_iterations", "factorizations", "rejected_steps")
 
 def sweep(label, codes, settings, repeats, measure, keep=None):
     """Every (code, model, run) of `codes` at every setting, the best of
-    `repeats`: one row per run. A setting is a substep h or an element count
+    `repeats`: one row per run. A code given as (code, model, run,
+    own_settings) runs at its own settings instead (tolerances of a
+    solver with step-size control beside the fixed steps of the others). A setting is a substep h or an element count
     n (run(setting)), or a pair (n, h) (run(n, h)); the row has the code,
     the setting (h_or_elements, and h_s for a pair), the wall time, the
     model, measure(result, code)'s columns (the error among them) and the
     solver's statistics. keep: a dict that gets each best result by (code,
     setting), for a study that draws its runs' curves."""
     rows = []
-    for code, model, run in codes:
-        for setting in settings:
+    for code, model, run, *own in codes:
+        for setting in (own[0] if own else settings):
             pair = isinstance(setting, tuple)
             r = best_of(lambda: run(*setting) if pair else run(setting), repeats)
             if keep is not None:

@@ -22,12 +22,17 @@ Writes r1_pendulum_precision.csv and .png.
 """
 import numpy as np
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, Panel, PeerStudy, exudyn_settings, exudyn_solve
+from peer_common import (EXUDYN, FMUS, OURS, FmuRun, Panel, PeerStudy, exudyn_explicit_settings, exudyn_settings,
+                         exudyn_solve)
 
 G, L, MASS, STOP = 9.81, 1.0, 1.0, 10.0
 R1_AT_10S = (0.275087462576, -0.961419205099)
 STEPS = [1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5]
 RHO_INF = 0.8
+# The error-controlled runs (ours and Exudyn's adaptive explicit solvers)
+# over tolerances, Exudyn's RK44 over fixed steps.
+TOLERANCES = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
+RK44_STEPS = [0.1, 5e-2, 2e-2, 1e-2, 5e-3, 2e-3]
 
 
 def position_error(x, y):
@@ -40,7 +45,16 @@ def ours(fmu, h, communication=0.1):
     return dict(wall_time_s=wall, error=position_error(x, y), rho_inf=RHO_INF, **statistics)
 
 
-def exudyn_kinematic_tree(h):
+def ours_by_tolerance(fmu, tolerance, communication=0.1):
+    """Driven by an error tolerance (fmi2SetupExperiment): the integrator
+    the FMU chooses (a rigid, non-stiff scene: Dormand-Prince 5(4)), h_max
+    the communication step."""
+    run = FmuRun(fmu, {"solver.h_max": communication}, tolerance=tolerance)
+    (x, y), wall, statistics = run.at_end(["bob.position.x", "bob.position.y"], STOP, communication)
+    return dict(wall_time_s=wall, error=position_error(x, y), tolerance=tolerance, **statistics)
+
+
+def exudyn_kinematic_tree(h, solver=None, tolerance=None):
     import exudyn as exu
     from exudyn.itemInterface import NodeGenericODE2, ObjectKinematicTree
 
@@ -53,11 +67,13 @@ def exudyn_kinematic_tree(h):
         linkInertiasCOM=exu.Matrix3DList([np.zeros((3, 3))]), linkCOMs=exu.Vector3DList([[L, 0.0, 0.0]]),
         linkMasses=[MASS], gravity=[0.0, -G, 0.0]))
     mbs.Assemble()
-    wall, statistics = exudyn_solve(mbs, exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF))
+    settings = (exudyn_explicit_settings(solver, STOP, h, tolerance) if solver
+                else exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF))
+    wall, statistics = exudyn_solve(mbs, settings)
     angle = mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates)
     angle = float(np.ravel(angle)[0])
-    return dict(wall_time_s=wall, error=position_error(L * np.cos(angle), L * np.sin(angle)), rho_inf=RHO_INF,
-                **statistics)
+    return dict(wall_time_s=wall, error=position_error(L * np.cos(angle), L * np.sin(angle)),
+                **(dict(solver=solver, tolerance=tolerance or "") if solver else dict(rho_inf=RHO_INF)), **statistics)
 
 
 def exudyn_mass_point(h):
@@ -86,8 +102,15 @@ class Study(PeerStudy):
 
     def codes(self):
         return [(OURS, "revolute joint, joint coordinate", lambda h: ours(self.args.fmu, h)),
+                (OURS, "by tolerance (Dormand-Prince 5(4))", lambda tol: ours_by_tolerance(self.args.fmu, tol),
+                 TOLERANCES),
                 (EXUDYN, "KinematicTree RevoluteZ (joint coordinate)", exudyn_kinematic_tree),
-                (EXUDYN, "MassPoint2D + ConnectorDistance (index 3)", exudyn_mass_point)]
+                (EXUDYN, "MassPoint2D + ConnectorDistance (index 3)", exudyn_mass_point),
+                (EXUDYN, "KinematicTree, RK44", lambda h: exudyn_kinematic_tree(h, "RK44"), RK44_STEPS),
+                (EXUDYN, "KinematicTree, DOPRI5 by tolerance",
+                 lambda tol: exudyn_kinematic_tree(None, "DOPRI5", tol), TOLERANCES),
+                (EXUDYN, "KinematicTree, ODE23 by tolerance",
+                 lambda tol: exudyn_kinematic_tree(None, "ODE23", tol), TOLERANCES)]
 
     def panels(self, tables):
         return [Panel("bob position error at t = 10 s [m]",

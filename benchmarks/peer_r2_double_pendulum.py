@@ -32,7 +32,8 @@ Writes r2_double_pendulum_precision.csv and .png.
 
 import numpy as np
 
-from peer_common import EXUDYN, FMUS, OURS, FmuRun, Panel, PeerStudy, exudyn_settings, exudyn_solve
+from peer_common import (EXUDYN, FMUS, OURS, FmuRun, Panel, PeerStudy, exudyn_explicit_settings, exudyn_settings,
+                         exudyn_solve)
 
 G, L, MASS, STOP, OUTPUT = 9.81, 1.0, 1.0, 10.0, 0.01
 J = MASS * L * L / 12  # about the centre of mass, perpendicular to the bar
@@ -41,6 +42,10 @@ RHO_INF = 1.0
 RHO_INF_EXUDYN_REDUNDANT = 0.95
 EXUDYN_TOLERANCE = 1e-14
 MGL = MASS * G * L
+# Error-controlled runs (ours, Exudyn's adaptive explicit solvers) over
+# tolerances; Exudyn's RK44 over fixed steps.
+TOLERANCES = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
+RK44_STEPS = [1e-2, 5e-3, 2e-3, 1e-3, 5e-4]
 
 
 def energy(p, v, w):
@@ -62,18 +67,23 @@ def metrics(p, v, w, angle):
     return dict(error=float(np.max(np.abs(energy(p, v, w)))) / MGL, constraint_drift=joint_points_drift(p, angle))
 
 
-def ours(fmu, h):
-    run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF, "solver.tolerance": EXUDYN_TOLERANCE})
+def ours(fmu, h, tolerance=None):
+    """Substeps of h, or driven by an error tolerance (the integrator the
+    FMU chooses, h_max the sampling step, the Newton tolerance its own)."""
+    parameters = ({"solver.h_max": OUTPUT} if tolerance else
+                  {"solver.h_max": h, "solver.rho_inf": RHO_INF, "solver.tolerance": EXUDYN_TOLERANCE})
+    run = FmuRun(fmu, parameters, tolerance=tolerance)
     names = [f"bar{i}.{q}.{c}" for i in (1, 2) for q in ("position", "velocity") for c in "xy"]
     names += ["bar1.angular_velocity.z", "bar2.angular_velocity.z", "shoulder.angle", "elbow.angle"]
     s, wall, statistics = run.sample(names, STOP, OUTPUT)
     p = s[:, [0, 1, 4, 5]].reshape(-1, 2, 2)
     v = s[:, [2, 3, 6, 7]].reshape(-1, 2, 2)
     angle = np.column_stack([s[:, 10], s[:, 10] + s[:, 11]])
-    return dict(wall_time_s=wall, **metrics(p, v, s[:, 8:10], angle), rho_inf=RHO_INF, **statistics)
+    return dict(wall_time_s=wall, **metrics(p, v, s[:, 8:10], angle), **statistics,
+                **({"tolerance": tolerance} if tolerance else {"rho_inf": RHO_INF}))
 
 
-def exudyn_kinematic_tree(h):
+def exudyn_kinematic_tree(h, solver=None, tolerance=None):
     import exudyn as exu
     from exudyn.itemInterface import NodeGenericODE2, ObjectKinematicTree, SensorNode
 
@@ -91,8 +101,9 @@ def exudyn_kinematic_tree(h):
                                         writeToFile=False))
                for kind in (exu.OutputVariableType.Coordinates, exu.OutputVariableType.Coordinates_t)]
     mbs.Assemble()
-    settings = exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF, tolerance=EXUDYN_TOLERANCE,
-                               sensor_period=OUTPUT)
+    settings = (exudyn_explicit_settings(solver, STOP, h, tolerance, sensor_period=OUTPUT) if solver else
+                exudyn_settings(end_time=STOP, h=h, rho_inf=RHO_INF, tolerance=EXUDYN_TOLERANCE,
+                                sensor_period=OUTPUT))
     wall, statistics = exudyn_solve(mbs, settings)
     q, qd = (mbs.GetSensorStoredData(s)[:, 1:3] for s in sensors)
     # Centre-of-mass kinematics of the two links from the joint coordinates.
@@ -103,7 +114,8 @@ def exudyn_kinematic_tree(h):
     p = np.stack([0.5 * L * e[:, 0], L * e[:, 0] + 0.5 * L * e[:, 1]], axis=1)
     v = np.stack([0.5 * L * rate[:, [0]] * n[:, 0], L * rate[:, [0]] * n[:, 0] + 0.5 * L * rate[:, [1]] * n[:, 1]],
                  axis=1)
-    return dict(wall_time_s=wall, **metrics(p, v, rate, angle), rho_inf=RHO_INF, **statistics)
+    return dict(wall_time_s=wall, **metrics(p, v, rate, angle), **statistics,
+                **(dict(solver=solver, tolerance=tolerance or "") if solver else {"rho_inf": RHO_INF}))
 
 
 def exudyn_rigid_bodies(h):
@@ -147,7 +159,14 @@ class Study(PeerStudy):
 
     def codes(self):
         return [(OURS, "two revolute joints, joint coordinates", lambda h: ours(self.args.fmu, h)),
+                (OURS, "by tolerance (Dormand-Prince 5(4))", lambda tol: ours(self.args.fmu, None, tol),
+                 TOLERANCES),
                 (EXUDYN, "KinematicTree 2 x RevoluteZ (joint coordinates)", exudyn_kinematic_tree),
+                (EXUDYN, "KinematicTree, RK44", lambda h: exudyn_kinematic_tree(h, "RK44"), RK44_STEPS),
+                (EXUDYN, "KinematicTree, DOPRI5 by tolerance",
+                 lambda tol: exudyn_kinematic_tree(None, "DOPRI5", tol), TOLERANCES),
+                (EXUDYN, "KinematicTree, ODE23 by tolerance",
+                 lambda tol: exudyn_kinematic_tree(None, "ODE23", tol), TOLERANCES),
                 (EXUDYN, f"RigidBody2D + RevoluteJoint2D (index 3, rho_inf {RHO_INF_EXUDYN_REDUNDANT})",
                  exudyn_rigid_bodies)]
 
