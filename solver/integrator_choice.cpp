@@ -1,0 +1,52 @@
+#include "integrator_choice.hpp"
+
+#include <algorithm>
+
+#include "integrator/explicit_runge_kutta.hpp"
+#include "integrator/generalized_alpha.hpp"
+#include "integrator/static_equilibrium.hpp"
+#include "scene/number_text.hpp"
+
+namespace mfbd {
+
+namespace {
+IntegratorChoice generalizedAlpha(const SolverOptions& options, const std::string& why) {
+  return {std::make_unique<GeneralizedAlpha>(options), "integrator: generalized-alpha: " + why};
+}
+
+IntegratorChoice dormandPrince(const SolverOptions& options, const std::string& why) {
+  return {std::make_unique<DormandPrince>(options), "integrator: Dormand-Prince 5(4): " + why};
+}
+}  // namespace
+
+IntegratorChoice chooseIntegrator(const Scene& scene, System& system, SolverOptions options) {
+  using Method = SolverOptions::Method;
+  if (scene.analysis == Analysis::Static) return {std::make_unique<StaticEquilibrium>(options), ""};
+  const bool flexible = system.model().flexible.nodes.size() > 0;
+  if (options.method == Method::GeneralizedAlpha) return generalizedAlpha(options, "solver.method");
+  if (options.method == Method::DormandPrince) {
+    // Always error-controlled: an explicit method at a fixed step could go
+    // unstable on a stiff scene and still return fmi2OK.
+    const bool own = options.errorTolerance <= 0.0;
+    if (own) options.errorTolerance = scene.experiment.tolerance;
+    return dormandPrince(options, "solver.method, tolerance " + numberText(options.errorTolerance) +
+                                      (own ? " (experiment.tolerance: none from fmi2SetupExperiment)" : "") +
+                                      (flexible ? "; flexible bodies are stiff: expect many small substeps" : ""));
+  }
+  if (options.errorTolerance <= 0.0)
+    return generalizedAlpha(options, "no error tolerance (fmi2SetupExperiment without one): substeps of h_max");
+  if (flexible) return generalizedAlpha(options, "flexible bodies (stiff)");
+  IntegratorState start;
+  start.t = scene.experiment.startTime;
+  start.q = system.model().initialConfiguration;
+  start.v = system.model().initialVelocity;
+  const double rate = DormandPrince(options).fastestRate(system, start);
+  const double step = std::min(options.hMax, scene.experiment.outputInterval);
+  const std::string mode = "fastest mode at the start |lambda| = " + numberText(rate) +
+                           " 1/s, times min(h_max, output_interval) = " + numberText(rate * step);
+  if (rate * step <= DormandPrince::kStabilityRadius)
+    return dormandPrince(options, "rigid scene, not stiff: " + mode + " <= 1 (explicit stability)");
+  return generalizedAlpha(options, "stiff: " + mode + " > 1 (explicit stability)");
+}
+
+}  // namespace mfbd
