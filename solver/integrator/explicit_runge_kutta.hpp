@@ -85,7 +85,7 @@ class DormandPrince : public TimeStepper {
   bool accelerations(Dynamics& system, std::string& why);
   // The stages from s into stage_ (the new state) and the error estimate.
   bool stages(Dynamics& system, const IntegratorState& s, double h, std::string& why);
-  double errorRatio(const IntegratorState& s, double h) const;
+  double errorRatio(double h) const;
   // Positions onto Phi = 0, velocities onto Phi_q v + Phi_t = 0, through the
   // last factorization (at z = stage_, whose Phi is in phi_, vdot and
   // lambda zero); `moved` if either changed.
