@@ -123,16 +123,16 @@ def test_closed_loop_keeps_its_constraint_and_follows_generalized_alpha(name):
 
 def test_slider_crank_drive_is_met_and_the_crank_turns_at_its_rate():
     # The drive omega t as a constraint row: the explicit method integrates
-    # its acceleration (zero) exactly, and the projection keeps the row. (The
-    # rate within the round-off of Phi_t, which the velocity projection takes
-    # by central differences in time: 1e-9 measured.)
+    # its acceleration (zero) exactly but for the round-off of the index-1
+    # solve (1e-11 of the accelerations), far below the projections' target
+    # (measured: 5e-11 rad, 8e-10 rad/s).
     omega = 2 * np.pi
     angles = []
     run(FMUS / "slider_crank.fmu", 1.0, 0.1, ["crank_pin.angle"], 1e-6, {"solver.h_max": 0.1},
         each_step=lambda s: angles.append(s.get("crank_pin.angle", "crank_pin.angle_rate")))
     t = 0.1 * np.arange(1, 11)
     angles = np.array(angles)
-    assert np.abs(angles[:, 0] - omega * t).max() < 1e-10
+    assert np.abs(angles[:, 0] - omega * t).max() < 1e-9
     assert np.abs(angles[:, 1] - omega).max() < 1e-8
 
 
