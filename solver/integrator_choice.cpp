@@ -1,6 +1,7 @@
 #include "integrator_choice.hpp"
 
 #include <algorithm>
+#include <sstream>
 
 #include "integrator/explicit_runge_kutta.hpp"
 #include "integrator/generalized_alpha.hpp"
@@ -10,6 +11,14 @@
 namespace mfbd {
 
 namespace {
+// Three significant digits: an estimate, for the log.
+std::string estimate(double x) {
+  std::ostringstream out;
+  out.precision(3);
+  out << x;
+  return out.str();
+}
+
 IntegratorChoice generalizedAlpha(const SolverOptions& options, const std::string& why) {
   return {std::make_unique<GeneralizedAlpha>(options), "integrator: generalized-alpha: " + why};
 }
@@ -49,8 +58,8 @@ IntegratorChoice chooseIntegrator(const Scene& scene, System& system, SolverOpti
   start.q = system.model().initialConfiguration;
   start.v = system.model().initialVelocity;
   const double rate = DormandPrince(options).fastestRate(system, start);
-  const std::string mode = "fastest mode at the start |lambda| = " + numberText(rate) +
-                           " 1/s, times the output interval = " + numberText(rate * interval);
+  const std::string mode = "fastest mode at the start |lambda| = " + estimate(rate) +
+                           " 1/s, times the output interval = " + estimate(rate * interval);
   if (rate * interval <= DormandPrince::kStabilityRadius)
     return dormandPrince(options, "rigid scene, not stiff: " + mode + " <= 1 (explicit stability)");
   return generalizedAlpha(options, "stiff: " + mode + " > 1 (explicit stability)");
