@@ -8,9 +8,8 @@
 #include "coupling/joint_constraint.hpp"
 #include "flex/flexible_energy.hpp"
 #include "integrator/constraint_rank.hpp"
-#include "integrator/generalized_alpha.hpp"
 #include "initial_equilibrium.hpp"
-#include "integrator/static_equilibrium.hpp"
+#include "integrator_choice.hpp"
 #include "rigid/force_elements.hpp"
 #include "rigid/mass_check.hpp"
 #include "rigid/recursive_dynamics.hpp"
@@ -94,9 +93,9 @@ Model assembleChecked(const Scene& scene) {
 
 Simulation::Simulation(const Scene& scene, double errorTolerance)
     : scene_(scene), system_(assembleChecked(scene)) {
-  const SolverOptions options = solverOptions(scene, errorTolerance);
-  if (scene.analysis == Analysis::Static) stepper_ = std::make_unique<StaticEquilibrium>(options);
-  else stepper_ = std::make_unique<GeneralizedAlpha>(options);
+  IntegratorChoice choice = chooseIntegrator(scene, system_, solverOptions(scene, errorTolerance));
+  stepper_ = std::move(choice.stepper);
+  integratorNote_ = choice.note;
   const Model& model = system_.model();
   for (const BodySpec& b : scene.bodies) bodyIndex_.push_back(findBody(model, b.name));
   for (const JointSpec& j : scene.joints) jointIndex_.push_back(findJoint(model, j.name));
@@ -123,6 +122,7 @@ bool Simulation::initialize(double t0, std::string& message, std::vector<std::st
   system_.startDrives(t0);
   carryFlexibleBodies();
   if (!assembleConstraints(message, notes)) return false;
+  if (notes && !integratorNote_.empty()) notes->push_back(integratorNote_);
   if (notes && system_.constraintCount() > 0) {
     const std::string redundant = redundantConstraints(state_.q, state_.v, true);
     if (!redundant.empty())

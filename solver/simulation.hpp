@@ -157,6 +157,7 @@ class Simulation {
   std::vector<std::string> warnings_;
   System system_;
   std::unique_ptr<TimeStepper> stepper_;
+  std::string integratorNote_;  // which integrator, and why (logged at initialization)
   IntegratorState state_;
   std::vector<int> trackedOrientations_;  // indices into orientation_ of the exposed bodies and nodes
   std::vector<bool> orientationTracked_;  // the same as flags over orientation_

@@ -176,6 +176,13 @@ VectorXd System::velocityConstraints(double t, const Configuration& q, const Vec
   Triplets jacobian;
   constraintJacobian(t, q, v, jacobian);
   for (const auto& e : jacobian) violation[e.row()] += e.value() * v[e.col()];
+  // A drive's row from its rate, exactly: the difference above leaves the
+  // round-off of its coordinate over dt (1e-9 rad/s at 7 rad), which a
+  // velocity projection would put into the driven rate.
+  for (const Joint& j : model_.joints)
+    if (j.driven)
+      violation[j.constraintOffset] =
+          v[j.velocityOffset] - (j.driveRateInput ? jointSignals_.at(j.inputOffset, t) : j.drive.rate(t));
   return violation;
 }
 

@@ -50,6 +50,9 @@ class System : public Dynamics {
   int velocityCount() const override { return model_.velocityCount; }
   int constraintCount() const override { return model_.constraintCount; }
   void retract(Configuration& q, const VectorXd& dq) const override;
+  void chartRate(const VectorXd& delta, const VectorXd& v, VectorXd& rate) const override {
+    mfbd::chartRate(model_.blocks, delta, v, rate);
+  }
   void residual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,
                 VectorXd& r, VectorXd& phi) override;
   void tangent(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot, const VectorXd& lambda,

@@ -18,6 +18,11 @@ class Dynamics {
   virtual int constraintCount() const = 0;
   // q <- q o exp(dq)
   virtual void retract(Configuration& q, const VectorXd& dq) const = 0;
+  // The local chart's velocity: along q(t) = q0 o exp(delta(t)) with
+  // velocity v, delta' = dexp^-1_delta(v): T^-1(delta) v on each rotation
+  // block (right-trivialised, body-frame angular velocity), v on scalars
+  // (Munthe-Kaas). By default every coordinate is a scalar.
+  virtual void chartRate(const VectorXd& /*delta*/, const VectorXd& v, VectorXd& rate) const { rate = v; }
   virtual void residual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                         const VectorXd& lambda, VectorXd& r, VectorXd& phi) = 0;
   // gamma with d2/dt2 Phi = Phi_q vdot + gamma (for consistent accelerations).

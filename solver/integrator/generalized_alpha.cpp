@@ -19,31 +19,10 @@ namespace {
 bool allFinite(const VectorXd& x) { return x.allFinite(); }
 }  // namespace
 
-// Consistent start: [M Phi_q^T; Phi_q 0] [vdot; lambda] = [-r(vdot = 0, lambda = 0); -gamma].
 bool GeneralizedAlpha::initialize(Dynamics& system, IntegratorState& state, std::string& message) {
-  const int n = system.velocityCount(), m = system.constraintCount();
-  state.vdot = VectorXd::Zero(n);
-  state.lambda = VectorXd::Zero(m);
-  VectorXd r, phi;
-  system.residual(state.t, state.q, state.v, state.vdot, state.lambda, r, phi);
-  VectorXd rhs = VectorXd::Zero(newtonSize(system, 1.0));
-  rhs.head(n) = -r;
-  if (m > 0) rhs.segment(n, m) = -system.constraintAccelerationTerm(state.t, state.q, state.v);
-  // Iterative refinement against the unregularised matrix removes the
-  // regularisation's error from the multipliers (they are reaction outputs).
-  VectorXd x;
-  if (!solveOnce(system, state, 1.0, 0.0, 0.0, rhs, m > 0 ? 3 : 0, x)) {
-    message = "the mass matrix is singular at the initial configuration";
-    return false;
-  }
-  state.vdot = x.head(n);
-  state.lambda = x.segment(n, m);
+  if (!consistentAccelerations(system, state, message)) return false;
   state.a = state.vdot;
   state.hBefore = 0.0;
-  if (!allFinite(state.vdot) || !allFinite(state.lambda)) {
-    message = "initial accelerations are not finite";
-    return false;
-  }
   if (state.h <= 0.0) state.h = options_.hMax;
   return true;
 }

@@ -99,6 +99,32 @@ bool TimeStepper::solveOnce(Dynamics& system, const IntegratorState& at, double 
   return true;
 }
 
+// [M Phi_q^T; Phi_q 0] [vdot; lambda] = [-r(vdot = 0, lambda = 0); -gamma].
+bool TimeStepper::consistentAccelerations(Dynamics& system, IntegratorState& state, std::string& message) {
+  const int n = system.velocityCount(), m = system.constraintCount();
+  state.vdot = VectorXd::Zero(n);
+  state.lambda = VectorXd::Zero(m);
+  VectorXd r, phi;
+  system.residual(state.t, state.q, state.v, state.vdot, state.lambda, r, phi);
+  VectorXd rhs = VectorXd::Zero(newtonSize(system, 1.0));
+  rhs.head(n) = -r;
+  if (m > 0) rhs.segment(n, m) = -system.constraintAccelerationTerm(state.t, state.q, state.v);
+  // Iterative refinement against the unregularised matrix removes the
+  // regularisation's error from the multipliers (they are reaction outputs).
+  VectorXd x;
+  if (!solveOnce(system, state, 1.0, 0.0, 0.0, rhs, m > 0 ? 3 : 0, x)) {
+    message = "the mass matrix is singular at the initial configuration";
+    return false;
+  }
+  state.vdot = x.head(n);
+  state.lambda = x.segment(n, m);
+  if (!state.vdot.allFinite() || !state.lambda.allFinite()) {
+    message = "initial accelerations are not finite";
+    return false;
+  }
+  return true;
+}
+
 bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const VectorXd& violation) {
   const int n = system.velocityCount(), m = system.constraintCount();
   VectorXd rhs = VectorXd::Zero(newtonSize(system, 1.0));
@@ -110,17 +136,23 @@ bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const
   return true;
 }
 
-// Step-size control of an integrator of order two, whose local error goes
-// as h^3 (Hairer, Norsett & Wanner I.II.4): h_new = h (0.9 / ratio)^(1/3),
-// within a factor 0.2 .. 5 per substep. An accepted substep keeps its size
-// while the proposal lies within 1 .. 1.25 times it: the Newton matrix is
-// kept only for the same h, and a refactorization per substep for a few
-// per cent of step size would cost more than it saves.
+// Step-size control (Hairer, Norsett & Wanner I.II.4): h_new = h (0.9 /
+// ratio)^(1/k) for an estimate that goes as h^k (stepControl(): k = 3 for
+// generalized-alpha, of order two), within a factor 0.2 .. 5 per substep.
+// An accepted substep keeps its size while the proposal lies within 1 ..
+// keepBand times it: generalized-alpha keeps its Newton matrix only for the
+// same h, and a refactorization per substep for a few per cent of step
+// size would cost more than it saves.
+double TimeStepper::stepFactor(double ratio, double low, double high) const {
+  if (!(ratio > 0.0)) return high;
+  const double k = stepControl().exponent;
+  return std::clamp(0.9 * (k == 3.0 ? std::cbrt(1.0 / ratio) : std::pow(1.0 / ratio, 1.0 / k)), low, high);
+}
+
 double TimeStepper::nextStep(double h, double step, double ratio) const {
-  const double factor = ratio > 0.0 ? std::clamp(0.9 * std::cbrt(1.0 / ratio), 0.2, 5.0) : 5.0;
-  const double proposal = step * factor;
+  const double proposal = step * stepFactor(ratio, 0.2, 5.0);
   if (proposal < h) return proposal;
-  if (proposal <= 1.25 * h) return h;
+  if (proposal <= stepControl().keepBand * h) return h;
   return std::min(proposal, options_.hMax);
 }
 
@@ -176,7 +208,7 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
     ++s.rejectedSubsteps;
     successes = 0;
     const bool finite = std::isfinite(errorRatio_);
-    h = !errorRejected_ ? 0.5 * step : step * (finite ? std::clamp(0.9 * std::cbrt(1.0 / errorRatio_), 0.2, 0.9) : 0.2);
+    h = !errorRejected_ ? 0.5 * step : step * (finite ? stepFactor(errorRatio_, 0.2, 0.9) : 0.2);
     if (errorRejected_) {
       ++result.errorRejections;
       result.lastRejection = "t = " + numberText(s.t) + ", h = " + numberText(step) + ": " + why;

@@ -77,6 +77,11 @@ class TimeStepper {
   // whose rate input jumped applies, M dv + Phi_q^T Lambda = 0. False if
   // the matrix is singular.
   static bool jumpVelocities(Dynamics& system, IntegratorState& state, const VectorXd& violation);
+  // Consistent accelerations and multipliers at (t, q, v) into state.vdot
+  // and state.lambda: [M Phi_q^T; Phi_q 0] [vdot; lambda] = [-r(vdot = 0,
+  // lambda = 0); -gamma], a factorization of its own. False (with a
+  // message) if the matrix is singular or the result not finite.
+  static bool consistentAccelerations(Dynamics& system, IntegratorState& state, std::string& message);
 
  protected:
   // One substep of size h from s.t; false (with a reason) leaves s unchanged.
@@ -86,6 +91,14 @@ class TimeStepper {
   // errorRatio_, the estimate over the tolerance, and rejects a substep
   // above it with errorRejected_).
   virtual bool errorControlled() const { return false; }
+  // How the step-size controller reads the estimate: it goes as
+  // h^exponent on smooth motion (order p + 1 for a local error of a method
+  // of order p), and an accepted substep keeps its size while the proposal
+  // lies within 1 .. keepBand times it (a kept size keeps a Newton matrix).
+  struct StepControl {
+    double exponent = 3.0, keepBand = 1.25;
+  };
+  virtual StepControl stepControl() const { return {}; }
   double errorRatio_ = 0.0;
   bool errorRejected_ = false;
 
@@ -117,6 +130,8 @@ class TimeStepper {
   // The next substep size after an accepted one of size `step` whose error
   // estimate was `ratio` times the tolerance; h the size tried.
   double nextStep(double h, double step, double ratio) const;
+  // The factor 0.9 ratio^(-1/exponent) of the elementary controller, within [low, high].
+  double stepFactor(double ratio, double low, double high) const;
   static void iterationTriplets(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
                                 Triplets& all, Triplets& jacobian);
 

@@ -23,6 +23,15 @@ void retract(const std::vector<CoordinateBlock>& blocks, Configuration& q, const
   for (const CoordinateBlock& b : blocks) retractAt(b, q, dq.data() + b.velocityOffset);
 }
 
+void chartRate(const std::vector<CoordinateBlock>& blocks, const VectorXd& delta, const VectorXd& v, VectorXd& rate) {
+  rate = v;
+  for (const CoordinateBlock& b : blocks) {
+    if (b.rotation < 0) continue;
+    const int k = b.velocityOffset;
+    rate.segment<3>(k) = tangentSO3Inverse(delta.segment<3>(k)) * v.segment<3>(k);
+  }
+}
+
 void restoreOrthogonality(Configuration& q) {
   for (Mat3& R : q.rotations) R = polarStep(R);
 }

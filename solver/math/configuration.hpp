@@ -35,6 +35,10 @@ struct CoordinateBlock {
 // Newton iterates are retracted many times per step; the polar correction
 // of round-off is left to restoreOrthogonality, once per accepted step.
 void retract(const std::vector<CoordinateBlock>& blocks, Configuration& q, const VectorXd& dq);
+// delta' along q0 o exp(delta(t)) with velocity v: T^-1(delta_b) v_b on
+// each rotation block b (math/rotation.hpp: tangentSO3Inverse), v_b on
+// scalar blocks.
+void chartRate(const std::vector<CoordinateBlock>& blocks, const VectorXd& delta, const VectorXd& v, VectorXd& rate);
 // One block of it: q's block b <- b o exp(dq), dq the block's own rates.
 void retractBlock(const CoordinateBlock& b, Configuration& q, const Eigen::Ref<const VectorXd>& dq);
 // Every stored rotation <- polarStep(rotation): keeps them orthogonal to

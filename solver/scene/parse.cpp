@@ -213,7 +213,8 @@ JointSpec parseJoint(const Field& f) {
 }
 
 SolverSection parseSolver(const Field& f) {
-  f.expectObject({"h_max", "h_min", "rho_inf", "tolerance", "max_iterations", "initial_equilibrium", "newton_matrix"},
+  f.expectObject({"h_max", "h_min", "rho_inf", "tolerance", "max_iterations", "initial_equilibrium", "newton_matrix",
+                  "method"},
                  {});
   SolverSection s;
   if (f.has("h_max")) s.hMax = f.at("h_max").positive();
@@ -232,6 +233,13 @@ SolverSection parseSolver(const Field& f) {
     else if (form == "joint_space") s.newtonMatrix = SolverSection::NewtonMatrix::JointSpace;
     else if (form == "recursive") s.newtonMatrix = SolverSection::NewtonMatrix::Recursive;
     else f.at("newton_matrix").fail("expected \"automatic\", \"joint_space\" or \"recursive\"");
+  }
+  if (f.has("method")) {
+    const std::string method = f.at("method").string();
+    if (method == "automatic") s.method = SolverSection::Method::Automatic;
+    else if (method == "generalized_alpha") s.method = SolverSection::Method::GeneralizedAlpha;
+    else if (method == "dormand_prince") s.method = SolverSection::Method::DormandPrince;
+    else f.at("method").fail("expected \"automatic\", \"generalized_alpha\" or \"dormand_prince\"");
   }
   return s;
 }

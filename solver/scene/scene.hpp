@@ -221,6 +221,11 @@ struct SolverSection {
   enum class NewtonMatrix { Automatic, JointSpace, Recursive };
   NewtonMatrix newtonMatrix = NewtonMatrix::Automatic;
   static constexpr int kRecursiveNewtonMatrixRates = 80;
+  // Time integrator of dynamics (solver/integrator_choice.cpp): implicit
+  // generalized-alpha, explicit Dormand-Prince 5(4), or automatic (the
+  // explicit method under error control for a scene that is not stiff).
+  enum class Method { Automatic, GeneralizedAlpha, DormandPrince };
+  Method method = Method::Automatic;
 };
 
 // Which outputs the FMU exposes. Empty lists with `all` false expose none.

@@ -57,7 +57,25 @@ CASES = [
 
 @pytest.mark.parametrize("name,start,t0,delta,max_order", CASES, ids=[c[0] for c in CASES])
 def test_output_derivatives_match_differences_of_the_outputs_over_small_steps(name, start, t0, delta, max_order):
-    s = started(FMUS / f"{name}.fmu", start)
+    check_output_derivatives(FMUS / f"{name}.fmu", start, t0, delta, max_order)
+
+
+def explicit(name, tmp_path):
+    scene = load_scene(name)
+    scene["solver"]["method"] = "dormand_prince"
+    return packed(scene, tmp_path, name)
+
+
+# The explicit integrator: the same consistent accelerations (its own
+# factorization), at substeps of h_max (a tolerance of 0.9 accepts each).
+@pytest.mark.parametrize("name,start,t0,delta,max_order", CASES[:5], ids=[c[0] for c in CASES[:5]])
+def test_output_derivatives_with_the_explicit_integrator(name, start, t0, delta, max_order, tmp_path):
+    check_output_derivatives(explicit(name, tmp_path), start, t0, delta, max_order, tolerance=0.9)
+
+
+def check_output_derivatives(fmu, start, t0, delta, max_order, tolerance=None):
+    s = Slave(fmu)
+    s.start(start, tolerance=tolerance)
     try:
         assert s.md.coSimulation.maxOutputDerivativeOrder == max_order
         outs = outputs_of(s)
@@ -221,8 +239,11 @@ def closed_loop_with_inputs():
     return scene
 
 
-def test_closed_loop_partials_agree_with_differences_and_model_structure(tmp_path):
-    s = started(packed(closed_loop_with_inputs(), tmp_path))
+@pytest.mark.parametrize("method", ["generalized_alpha", "dormand_prince"])
+def test_closed_loop_partials_agree_with_differences_and_model_structure(tmp_path, method):
+    scene = closed_loop_with_inputs()
+    scene["solver"]["method"] = method
+    s = started(packed(scene, tmp_path))
     try:
         assert s.step(0.0, 0.1) == OK
         assert s.set("push.force.y", 2.0) == OK
@@ -316,8 +337,11 @@ def test_static_scenes_declare_no_derivatives_and_refuse_them():
         s.free()
 
 
-def test_derivative_calls_leave_the_run_bit_for_bit_unchanged(tmp_path):
-    fmu = packed(closed_loop_with_inputs(), tmp_path)
+@pytest.mark.parametrize("method", ["generalized_alpha", "dormand_prince"])
+def test_derivative_calls_leave_the_run_bit_for_bit_unchanged(tmp_path, method):
+    scene = closed_loop_with_inputs()
+    scene["solver"]["method"] = method
+    fmu = packed(scene, tmp_path)
     a, b = started(fmu), started(fmu)
     try:
         outs = [v.valueReference for v in outputs_of(a)]

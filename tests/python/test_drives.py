@@ -3,6 +3,7 @@ rate, held over a communication step; the coordinate integrates it, a rate
 that jumps makes the velocities jump by the drive's impulse, and the drive
 torque output is checked against Newton-Euler by hand."""
 import numpy as np
+import pytest
 
 from conftest import Slave, packed
 
@@ -60,9 +61,19 @@ def run(fmu, rates, H=0.01):
     return np.array(rows)
 
 
-def test_constant_rate_input_drive_torque_matches_newton_euler(tmp_path):
+# Both integrators (the explicit one at the experiment's tolerance, 1e-4).
+METHODS = ["generalized_alpha", "dormand_prince"]
+
+
+def with_method(scene, method):
+    scene["solver"]["method"] = method
+    return scene
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_constant_rate_input_drive_torque_matches_newton_euler(tmp_path, method):
     omega = 3.0
-    r = run(packed(driven_double_pendulum(omega), tmp_path), [omega] * 200)
+    r = run(packed(with_method(driven_double_pendulum(omega), method), tmp_path), [omega] * 200)
     t, angle, rate, torque, hand = r.T
     assert np.max(np.abs(angle - omega * t)) < 1e-12
     assert np.max(np.abs(rate - omega)) < 1e-9
@@ -70,7 +81,8 @@ def test_constant_rate_input_drive_torque_matches_newton_euler(tmp_path):
     assert np.max(np.abs(torque - hand)) < 1e-8 * np.max(np.abs(hand))
 
 
-def test_rate_input_held_over_each_step_and_jumps_by_an_impulse(tmp_path):
+@pytest.mark.parametrize("method", METHODS)
+def test_rate_input_held_over_each_step_and_jumps_by_an_impulse(tmp_path, method):
     # The master changes the rate at every communication point. The angle is
     # the sum of the held rates times the step; right after each step the
     # joint turns at the rate just held (the velocities jumped at the step
@@ -78,7 +90,7 @@ def test_rate_input_held_over_each_step_and_jumps_by_an_impulse(tmp_path):
     # communication points is again the hand Newton-Euler value.
     H = 0.01
     rates = 2.0 * np.sin(np.arange(300) * H) + 1.0
-    r = run(packed(driven_double_pendulum(0.0), tmp_path), rates, H)
+    r = run(packed(with_method(driven_double_pendulum(0.0), method), tmp_path), rates, H)
     t, angle, rate, torque, hand = r.T
     assert np.max(np.abs(angle - np.cumsum(rates) * H)) < 1e-12
     assert np.max(np.abs(rate - rates)) < 1e-9

@@ -28,7 +28,8 @@ BEFORE = {
 TOP_LEVEL = {
     "system": ["system", "two_marker_constraints", "constraint_rows", "joint_space_tangent",
                "recursive_newton_matrix"],
-    "simulation": ["simulation", "mechanism_assembly", "output_derivatives", "initial_equilibrium"],
+    "simulation": ["simulation", "mechanism_assembly", "output_derivatives", "initial_equilibrium",
+                   "integrator_choice"],
 }
 INCLUDE = re.compile(r'^#include "([^"]+)"', re.MULTILINE)
 
