@@ -59,15 +59,6 @@ int32_t keepOrder(int32_t n, int32_t*, int32_t*, int32_t* permutation, klu_commo
 // column), about twice as fast; a full factorization is taken again when
 // the pivots have degraded (reciprocal pivot ratio below 1e-3 of the full
 // factorization's) or the refactorization fails.
-// klu_refactor in the MinGW build of KLU gives factors that make modified
-// Newton diverge at once (flexible_four_bar, n_four_bar: fmi2Discard in the
-// first substep, where the linux64 build of the same source converges);
-// the cause is not found yet, so win64 takes a full factorization each time.
-#ifdef _WIN32
-constexpr bool kRefactor = false;
-#else
-constexpr bool kRefactor = true;
-#endif
 struct KluFactors {
   klu_common common;
   klu_symbolic* symbolic = nullptr;
@@ -101,7 +92,7 @@ struct KluFactors {
     int* i = const_cast<int*>(A.innerIndexPtr());
     double* x = const_cast<double*>(A.valuePtr());
     lastFull = false;
-    if (numeric && kRefactor) {
+    if (numeric) {
       if (klu_refactor(p, i, x, symbolic, numeric, &common) && klu_rcond(symbolic, numeric, &common) &&
           common.rcond >= 1e-3 * fullPivotRatio)
         return true;
