@@ -61,14 +61,16 @@ class FmuRun:
     callback into Python at every step). The Newton tolerance is
     NEWTON_TOLERANCE (Exudyn's) unless `parameters` sets solver.tolerance."""
 
-    def __init__(self, fmu, parameters=None, tolerance=None):
+    def __init__(self, fmu, parameters=None, tolerance=None, stop_time=None):
         # Driven by an error tolerance (fmi2SetupExperiment), the Newton
         # tolerance follows it (README, Error control) unless set here.
         parameters = {**({} if tolerance else {"solver.tolerance": NEWTON_TOLERANCE}), **(parameters or {})}
         self.slave = Slave(fmu)
         assert self.slave.instantiate(logging_on=True), self.slave.messages()
         self.slave.call("setDebugLogging", True, ["logStatistics"])
-        assert self.slave.call("setupExperiment", tolerance, 0.0, None) == 0
+        # stop_time: the duration the error tolerance holds over (README,
+        # Error control; none: the scene's experiment).
+        assert self.slave.call("setupExperiment", tolerance, 0.0, stop_time) == 0
         for name, value in parameters.items():
             assert self.slave.set(name, value) == 0, self.slave.messages()
         self.t = 0.0

@@ -168,7 +168,9 @@ fmi2Status Instance::loadState(const char* function, const std::vector<unsigned 
     if (f.values.size() != n || f.derivative1.size() != n || f.derivative2.size() != n ||
         (f.hasSimulation && f.builtWith.size() != n) || !(f.mode & modes) || (f.mode & (f.mode - 1u)))
       throw StateError("its instance fields do not fit this FMU");
-    if (f.hasSimulation && simulation_ && sameFixedParameters(builtWith_, f.builtWith) && f.tolerance == tolerance_) {
+    const double horizon = errorHorizon(f.stopTimeDefined, f.startTime, f.stopTime);
+    if (f.hasSimulation && simulation_ && sameFixedParameters(builtWith_, f.builtWith) && f.tolerance == tolerance_ &&
+        horizon == errorHorizon(stopTimeDefined_, startTime_, stopTime_)) {
       std::vector<unsigned char> backup;
       StateWriter keep(backup);
       simulation_->saveState(keep);
@@ -181,7 +183,7 @@ fmi2Status Instance::loadState(const char* function, const std::vector<unsigned 
         throw;
       }
     } else if (f.hasSimulation) {
-      fresh = makeSimulation(f.builtWith, f.tolerance);
+      fresh = makeSimulation(f.builtWith, f.tolerance, horizon);
       fresh->loadState(ar);
     }
     if (!ar.atEnd()) throw StateError("bytes are left after its last field");

@@ -137,20 +137,21 @@ fmi2Status Instance::setupExperiment(bool toleranceDefined, double tolerance, do
   return fmi2OK;
 }
 
-std::unique_ptr<Simulation> Instance::makeSimulation(const std::vector<double>& values, double tolerance) const {
+std::unique_ptr<Simulation> Instance::makeSimulation(const std::vector<double>& values, double tolerance,
+                                                     double horizon) const {
   std::map<std::string, double> user;
   for (std::size_t i = 0; i < table_.size(); ++i)
     if (table_[i].quantity.kind == QuantityKind::UserParameter) user[table_[i].name] = values[i];
   Scene scene = parseScene(sceneText_, user);
   for (std::size_t i = 0; i < table_.size(); ++i)
     if (table_[i].causality == Causality::Parameter) setSceneParameter(scene, table_[i].quantity, values[i]);
-  return std::make_unique<Simulation>(scene, tolerance);
+  return std::make_unique<Simulation>(scene, tolerance, horizon);
 }
 
 // Scene with the current parameter values -> Simulation at startTime.
 bool Instance::buildSimulation(const char* function) {
   try {
-    simulation_ = makeSimulation(values_, tolerance_);
+    simulation_ = makeSimulation(values_, tolerance_, errorHorizon(stopTimeDefined_, startTime_, stopTime_));
     builtWith_ = values_;
   } catch (const SceneError& e) {
     fail(function, std::string("with the parameter values set: ") + e.what());

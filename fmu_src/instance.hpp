@@ -80,7 +80,13 @@ class Instance {
   bool buildSimulation(const char* function);
   // A Simulation of the scene with the fixed parameters of `values` (by
   // table index), not yet initialized. Throws SceneError.
-  std::unique_ptr<Simulation> makeSimulation(const std::vector<double>& values, double tolerance) const;
+  std::unique_ptr<Simulation> makeSimulation(const std::vector<double>& values, double tolerance,
+                                             double horizon) const;
+  // The duration the error tolerance holds over: stopTime - startTime when
+  // fmi2SetupExperiment defined it, else 0 (the scene's experiment).
+  static double errorHorizon(bool stopTimeDefined, double startTime, double stopTime) {
+    return stopTimeDefined ? stopTime - startTime : 0.0;
+  }
   // State bytes of the present instance, and their restore (all or nothing).
   std::vector<unsigned char> saveState();
   fmi2Status loadState(const char* function, const std::vector<unsigned char>& bytes);

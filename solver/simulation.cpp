@@ -23,7 +23,12 @@ void setSceneParameter(Scene& scene, const Quantity& q, double value) {
     case QuantityKind::Gravity: scene.gravity[q.component] = value; break;
     case QuantityKind::StepSizeMax: scene.solver.hMax = value; break;
     case QuantityKind::SpectralRadius: scene.solver.rhoInf = value; break;
-    case QuantityKind::NewtonTolerance: scene.solver.tolerance = value; break;
+    case QuantityKind::NewtonTolerance:
+      // The parameter always carries a value (its start is the scene's):
+      // another one is the user's choice.
+      if (value != scene.solver.tolerance) scene.solver.toleranceGiven = true;
+      scene.solver.tolerance = value;
+      break;
     case QuantityKind::MaxSubsteps: scene.solver.maxSubsteps = value; break;
     case QuantityKind::JointDamping: scene.joints[q.index].damping = value; break;
     case QuantityKind::FlexibleDamping: scene.flexibleBodies[q.index].damping = value; break;
@@ -67,8 +72,9 @@ double lengthScale(const Scene& scene) {
 }
 
 // The integrator's options: the scene's solver section, the FMI tolerance
-// and the scene's length scale as the error's scale.
-SolverOptions solverOptions(const Scene& scene, double errorTolerance) {
+// and the scene's length scale as the error's scale, the experiment's
+// duration (fmi2SetupExperiment's, else the scene's) as its horizon.
+SolverOptions solverOptions(const Scene& scene, double errorTolerance, double errorHorizon) {
   const SolverSection& s = scene.solver;
   SolverOptions options;
   options.hMax = s.hMax;
@@ -79,6 +85,9 @@ SolverOptions solverOptions(const Scene& scene, double errorTolerance) {
   options.maxIterations = s.maxIterations;
   options.errorTolerance = errorTolerance;
   options.errorScale = lengthScale(scene);
+  const double duration = scene.experiment.stopTime - scene.experiment.startTime;
+  options.errorHorizon = errorHorizon > 0.0 ? errorHorizon : duration > 0.0 ? duration : 1.0;
+  options.newtonFollowsError = !s.toleranceGiven;
   return options;
 }
 
@@ -91,9 +100,9 @@ Model assembleChecked(const Scene& scene) {
 }
 }  // namespace
 
-Simulation::Simulation(const Scene& scene, double errorTolerance)
+Simulation::Simulation(const Scene& scene, double errorTolerance, double errorHorizon)
     : scene_(scene), system_(assembleChecked(scene)) {
-  IntegratorChoice choice = chooseIntegrator(scene, system_, solverOptions(scene, errorTolerance));
+  IntegratorChoice choice = chooseIntegrator(scene, system_, solverOptions(scene, errorTolerance, errorHorizon));
   stepper_ = std::move(choice.stepper);
   integratorNote_ = choice.note;
   const Model& model = system_.model();

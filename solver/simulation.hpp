@@ -58,8 +58,9 @@ double sceneParameter(const Scene& scene, const Quantity& q);
 class Simulation {
  public:
   // errorTolerance: the FMI tolerance (fmi2SetupExperiment), 0: no error
-  // control. Throws SceneError.
-  explicit Simulation(const Scene& scene, double errorTolerance = 0.0);
+  // control; errorHorizon: the duration it holds over (stopTime - startTime),
+  // 0: the scene's experiment. Throws SceneError.
+  explicit Simulation(const Scene& scene, double errorTolerance = 0.0, double errorHorizon = 0.0);
 
   // Assembles closed loops and drives at time t0 (positions, then
   // velocities, projected onto the constraints by least change), then

@@ -51,10 +51,12 @@ class DormandPrince : public TimeStepper {
   void saveState(StateWriter& ar) override {
     TimeStepper::saveState(ar);
     solver_.saveOrLoad(ar);
+    ar(dependentRows_);
   }
   void loadState(StateReader& ar) override {
     TimeStepper::loadState(ar);
     solver_.saveOrLoad(ar);
+    ar(dependentRows_);
   }
 
   // The spectral radius of the Jacobian of (delta, v)' at the state (1/s):
@@ -73,8 +75,9 @@ class DormandPrince : public TimeStepper {
  protected:
   bool substep(Dynamics& system, IntegratorState& s, double h, std::string& why) override;
   bool errorControlled() const override { return options_.errorTolerance > 0.0; }
-  // The estimate (order-5 minus order-4 solution) goes as h^5; no Newton
-  // matrix to keep, so no band of kept sizes.
+  // The estimate (order-5 minus order-4 solution) goes as h^5 and is held
+  // per step (see errorRatio); no Newton matrix to keep, so no band of kept
+  // sizes.
   StepControl stepControl() const override { return {5.0, 1.0}; }
 
  private:
@@ -90,6 +93,14 @@ class DormandPrince : public TimeStepper {
   // last factorization (at z = stage_, whose Phi is in phi_, vdot and
   // lambda zero); `moved` if either changed.
   bool project(Dynamics& system, IntegratorState& z, bool& moved, std::string& why);
+
+  // Redundant constraints (the Bricard mechanism: one row a combination of
+  // the others along the whole motion), found at the start by
+  // constraintRank: their right-hand sides are made consistent with the
+  // other rows' before each solve (see makeConsistent).
+  void findDependentRows(Dynamics& system, const IntegratorState& at);
+  void makeConsistent(Dynamics& system, Eigen::Ref<VectorXd> rows) const;
+  std::vector<int> dependentRows_;
 
   LinearSolver solver_;
   IntegratorState stage_;  // the stage under way (t, q, v)

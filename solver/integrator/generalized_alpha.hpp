@@ -48,6 +48,9 @@ class GeneralizedAlpha : public TimeStepper {
   bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why) override;
   void beginAdvance(const Dynamics& system) override { refresh_.beginAdvance(system.tangentCost()); }
   bool errorControlled() const override { return options_.errorTolerance > 0.0; }
+  // Error per unit step: the estimate goes as h^3, its ratio to the local
+  // error allowed (proportional to h) as h^2.
+  StepControl stepControl() const override { return {2.0, 1.25}; }
 
  private:
   friend class SubstepNewton;

@@ -19,12 +19,19 @@ struct SolverOptions {
   // of a conservative system), so the default is near round-off.
   double tolerance = 1e-14;
   int maxIterations = 12;
-  // Error control (the FMI tolerance, fmi2SetupExperiment): each substep's
-  // local error, estimated in the position coordinates, at most
-  // errorTolerance * errorScale (m; rad against errorScale / 1 m); 0: no
-  // control, substeps of h_max. errorScale is the scene's length scale.
+  // Error control (the FMI tolerance, fmi2SetupExperiment): error per unit
+  // step. Each substep of size h keeps its local error, estimated in the
+  // position coordinates (m, rad) and in the velocities (per s), below
+  // errorTolerance * errorScale * h / errorHorizon, so that the local errors
+  // of a whole experiment add up to the tolerance (rad against errorScale /
+  // 1 m). 0: no control, substeps of h_max. errorScale is the scene's length
+  // scale, errorHorizon the experiment's duration (s).
   double errorTolerance = 0.0;
   double errorScale = 1.0;
+  double errorHorizon = 1.0;
+  // Newton's tolerance follows the error tolerance (a fraction of the local
+  // error allowed) instead of `tolerance`, which the scene did not set.
+  bool newtonFollowsError = false;
 };
 
 }  // namespace mfbd

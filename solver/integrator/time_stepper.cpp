@@ -80,6 +80,14 @@ bool TimeStepper::assembleIterationMatrix(Dynamics& system, const IntegratorStat
   return iteration_.assign(newtonSize(system, cM), iterationTriplets_);
 }
 
+Eigen::MatrixXd TimeStepper::denseJacobian(const Dynamics& system, const Triplets& jacobian) {
+  const int n = system.velocityCount();
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(system.constraintCount(), n);
+  for (const auto& t : jacobian)
+    if (t.col() < n) J(t.row(), t.col()) += t.value();
+  return J;
+}
+
 void TimeStepper::loadState(StateReader& ar) {
   ar(iteration_);
   if (!iteration_.valid()) throw StateError("the saved Newton matrix's pattern is inconsistent");
@@ -137,8 +145,9 @@ bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const
 }
 
 // Step-size control (Hairer, Norsett & Wanner I.II.4): h_new = h (0.9 /
-// ratio)^(1/k) for an estimate that goes as h^k (stepControl(): k = 3 for
-// generalized-alpha, of order two), within a factor 0.2 .. 5 per substep.
+// ratio)^(1/k) for a ratio of estimate to allowed error that goes as h^k
+// (stepControl(): error per unit step, k = p for a method of order p, 2 for
+// generalized-alpha), within a factor 0.2 .. 5 per substep.
 // An accepted substep keeps its size while the proposal lies within 1 ..
 // keepBand times it: generalized-alpha keeps its Newton matrix only for the
 // same h, and a refactorization per substep for a few per cent of step
@@ -146,7 +155,8 @@ bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const
 double TimeStepper::stepFactor(double ratio, double low, double high) const {
   if (!(ratio > 0.0)) return high;
   const double k = stepControl().exponent;
-  return std::clamp(0.9 * (k == 3.0 ? std::cbrt(1.0 / ratio) : std::pow(1.0 / ratio, 1.0 / k)), low, high);
+  const double root = k == 2.0 ? std::sqrt(1.0 / ratio) : k == 3.0 ? std::cbrt(1.0 / ratio) : std::pow(1.0 / ratio, 1.0 / k);
+  return std::clamp(0.9 * root, low, high);
 }
 
 double TimeStepper::nextStep(double h, double step, double ratio) const {

@@ -101,6 +101,11 @@ class TimeStepper {
   virtual StepControl stepControl() const { return {}; }
   double errorRatio_ = 0.0;
   bool errorRejected_ = false;
+  // The local error a substep of size h may make under error control (error
+  // per unit step, SolverOptions): tol L h / horizon.
+  double allowedLocalError(double h) const {
+    return options_.errorTolerance * options_.errorScale * h / options_.errorHorizon;
+  }
 
   // The Newton matrix [S Phi_q^T; Phi_q -eps I] from the system's tangent,
   // auxiliary unknowns last.
@@ -123,6 +128,9 @@ class TimeStepper {
   // The system's pivot order (Dynamics::pivotOrder) in the matrix's indices.
   static std::vector<std::pair<int, int>> pivotOrder(const Dynamics& system, double cM);
   const SparseMatrix& assembledIterationMatrix() const { return iteration_.matrix(); }
+  // Phi_q of the last assembleIterationMatrix, dense (constraintCount x velocityCount).
+  Eigen::MatrixXd assembledJacobian(const Dynamics& system) const { return denseJacobian(system, jacobianTriplets_); }
+  static Eigen::MatrixXd denseJacobian(const Dynamics& system, const Triplets& jacobian);
 
   SolverOptions options_;
 

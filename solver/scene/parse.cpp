@@ -224,7 +224,10 @@ SolverSection parseSolver(const Field& f) {
     s.rhoInf = f.at("rho_inf").number();
     if (s.rhoInf < 0.0 || s.rhoInf > 1.0) f.at("rho_inf").fail("expected a spectral radius in [0, 1]");
   }
-  if (f.has("tolerance")) s.tolerance = f.at("tolerance").positive();
+  if (f.has("tolerance")) {
+    s.tolerance = f.at("tolerance").positive();
+    s.toleranceGiven = true;
+  }
   if (f.has("max_iterations")) s.maxIterations = f.at("max_iterations").integer(1, 100);
   if (f.has("initial_equilibrium")) s.initialEquilibrium = f.at("initial_equilibrium").boolean();
   if (f.has("newton_matrix")) {

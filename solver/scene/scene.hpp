@@ -209,6 +209,10 @@ struct SolverSection {
   double rhoInf = 0.8;      // generalized-alpha spectral radius at infinity
   double maxSubsteps = 1e5; // substeps one communication step may take
   double tolerance = 1e-14; // Newton: position error left (m, rad)
+  // Whether the scene (or the parameter solver.tolerance, set to another
+  // value) gave the Newton tolerance; if not, under an error tolerance it
+  // follows that (SolverOptions::newtonFollowsError).
+  bool toleranceGiven = false;
   int maxIterations = 12;
   // Dynamics starts from the static equilibrium under gravity and loads at
   // the start time (solved at fmi2ExitInitializationMode), at rest.
