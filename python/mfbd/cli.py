@@ -27,6 +27,9 @@ def parser():
     p.add_argument("--stop-time", type=float, help="s (default: the scene's experiment)")
     p.add_argument("--step", "--output-interval", dest="step", type=float,
                    help="communication step, s (default: the scene's output_interval)")
+    p.add_argument("--relative-tolerance", type=float, metavar="TOL",
+                   help="error tolerance (fmi2SetupExperiment; default: the scene's experiment.tolerance; "
+                        "0: none, substeps of solver.h_max)")
     p.add_argument("--tolerance", type=float, help="Newton tolerance (solver.tolerance)")
     p.add_argument("--parquet", action="store_true", help="also write NAME.parquet")
     p.add_argument("--no-plot", action="store_true")
@@ -62,7 +65,7 @@ def simulate_command(args):
         extra = required_outputs(read_scene(args.fmu)[0]) if outputs else []
     result = runner.simulate(args.fmu, parameters, _with_drawing_outputs(args.fmu, outputs, extra),
                              args.stop_time, args.step, args.tolerance, progress=not args.quiet,
-                             verbose=args.verbose)
+                             verbose=args.verbose, relative_tolerance=args.relative_tolerance)
     selected = runner.select(list(result.values), outputs) if outputs else list(result.values)
     _write_tables(args, result, selected)
     if drawing_wanted:

@@ -77,7 +77,8 @@ class Master:
     """One FMU instance: instantiate, set parameters, initialize; then
     step() and get(); close() frees it and its unpacked folder."""
 
-    def __init__(self, fmu, parameters=None, verbose=False, log=None, start_time=0.0, stop_time=None):
+    def __init__(self, fmu, parameters=None, verbose=False, log=None, start_time=0.0, stop_time=None,
+                 relative_tolerance=None):
         self.md = read_model_description(str(fmu))
         self.variables = {v.name: v for v in self.md.modelVariables}
         self.log = log if log is not None else []
@@ -98,7 +99,7 @@ class Master:
             raise RuntimeError("fmi2Instantiate failed: " + "; ".join(m for _, _, m in self.log))
         if verbose:
             self.fmu.setDebugLogging(True, VERBOSE_CATEGORIES)
-        self.fmu.setupExperiment(startTime=start_time, stopTime=stop_time)
+        self.fmu.setupExperiment(tolerance=relative_tolerance, startTime=start_time, stopTime=stop_time)
         for name, value in (parameters or {}).items():
             self.set(name, value)
         self.fmu.enterInitializationMode()
@@ -151,9 +152,12 @@ class Master:
 
 
 def simulate(fmu, parameters=None, outputs=None, stop_time=None, step=None, tolerance=None,
-             progress=True, verbose=False):
+             progress=True, verbose=False, relative_tolerance=None):
     """Runs the FMU from its default experiment (overridden by the
-    arguments) and returns a Result of the selected outputs."""
+    arguments) and returns a Result of the selected outputs. tolerance: the
+    Newton tolerance (solver.tolerance); relative_tolerance: the error
+    tolerance given to fmi2SetupExperiment (None: the default experiment's,
+    0: none, substeps of solver.h_max)."""
     md = read_model_description(str(fmu))
     names = [v.name for v in md.modelVariables if v.causality == "output"]
     chosen = select(names, outputs)
@@ -162,11 +166,14 @@ def simulate(fmu, parameters=None, outputs=None, stop_time=None, step=None, tole
     t_end = float(stop_time if stop_time is not None else (experiment.stopTime if experiment else 1.0))
     h = float(step if step is not None else (experiment.stepSize if experiment and experiment.stepSize else
                                              (t_end - t0) / 500))
+    if relative_tolerance is None:
+        relative_tolerance = float(experiment.tolerance) if experiment and experiment.tolerance else 0.0
     params = dict(parameters or {})
     if tolerance is not None:
         params["solver.tolerance"] = tolerance
     log = []
-    master = Master(fmu, params, verbose=verbose, log=log, start_time=t0, stop_time=t_end)
+    master = Master(fmu, params, verbose=verbose, log=log, start_time=t0, stop_time=t_end,
+                    relative_tolerance=relative_tolerance or None)
     n = max(1, int(np.ceil((t_end - t0) / h * (1 - 1e-12))))  # the last step ends at t_end
     times, rows = [t0], [master.get(chosen)]
     truncated, message = False, ""
