@@ -249,6 +249,15 @@ def without_visuals(scene):
     return scene
 
 
+def source_commit(build):
+    """The commit of the sources a build folder was configured from (its
+    CMakeCache's CMAKE_HOME_DIRECTORY), for the CSV and the figure."""
+    cache = (build / "CMakeCache.txt").read_text()
+    home = re.search(r"^CMAKE_HOME_DIRECTORY:INTERNAL=(.*)$", cache, re.M).group(1)
+    result = subprocess.run(["git", "-C", home, "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
+    return result.stdout.strip() or home
+
+
 def measure_case(args, label, setting, module_name, scene_of, run_of, work):
     scene, run = case_settings(module_name, scene_of, run_of)
     after_scene = copy.deepcopy(scene)
@@ -257,7 +266,7 @@ def measure_case(args, label, setting, module_name, scene_of, run_of, work):
     packs = {"before": Packed(args.before, without_visuals(scene), folder / "before"),
              "after": Packed(args.after, after_scene, folder / "after")}
     commands = {side: p.command(args.master, run) for side, p in packs.items()}
-    row = dict(problem=label, setting=setting, stop_s=run["stop"], communication_s=run["communication"],
+    row = dict(problem=label, setting=setting, before=args.before_commit, after=args.after_commit, stop_s=run["stop"], communication_s=run["communication"],
                h_max_s=run["parameters"].get("solver.h_max", ""))
     printed = {}
     if not args.no_callgrind:
@@ -314,7 +323,8 @@ def draw(rows, png):
     ax.set_xticks(x)
     ax.set_xticklabels(labels, rotation=90, fontsize=7)
     ax.set_ylabel("after / before")
-    ax.set_title("Cost of our FMU after the restructuring (issue 16) over before, generalized-alpha at fixed h")
+    ax.set_title(f"Cost of our FMU built at {rows[0]['after']} over {rows[0]['before']}, "
+                 "generalized-alpha at fixed substeps")
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.45), ncol=3)
     fig.tight_layout()
     fig.savefig(png, dpi=110, bbox_inches="tight")
@@ -323,7 +333,7 @@ def draw(rows, png):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--before", type=pathlib.Path, required=True, help="build folder of the older code")
+    p.add_argument("--before", type=pathlib.Path, help="build folder of the older code")
     p.add_argument("--after", type=pathlib.Path, default=ROOT / "build", help="build folder of this code")
     p.add_argument("--master", type=pathlib.Path, default=ROOT / "build" / "fmu_master")
     p.add_argument("--runs", type=int, default=5, help="interleaved CPU-time runs of each build")
@@ -331,8 +341,18 @@ def main():
     p.add_argument("--no-callgrind", action="store_true", help="CPU time only")
     p.add_argument("--out", type=pathlib.Path, default=HERE / "results")
     p.add_argument("--name", default="architecture_cost", help="results/NAME.csv and NAME.png")
+    p.add_argument("--replot", action="store_true", help="redraw results/NAME.png from results/NAME.csv")
     p.add_argument("--keep", type=pathlib.Path, help="keep the packed FMUs and callgrind files in this folder")
     args = p.parse_args()
+    if args.replot:
+        with open(args.out / f"{args.name}.csv") as f:
+            rows = [{k: (float(v) if re.fullmatch(r"[-+.\deE]+|inf|nan", v) else v) for k, v in r.items()}
+                    for r in csv.DictReader(f)]
+        draw(rows, args.out / f"{args.name}.png")
+        return
+    if args.before is None:
+        p.error("--before BUILD_DIR is needed (or --replot)")
+    args.before_commit, args.after_commit = source_commit(args.before), source_commit(args.after)
     only = {s.strip() for s in args.only.split(",") if s.strip()}
     rows = []
     with tempfile.TemporaryDirectory(prefix="mfbd-arch-") as tmp:
