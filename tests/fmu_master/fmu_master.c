@@ -8,7 +8,9 @@
  * A VR=VALUE argument sets that real before initialization (a parameter's or
  * an input's start value); the other VRs are printed.
  * Exit status 0 when every call returned fmi2OK, else 1 (the FMU's log on
- * stderr). tests/python/test_platforms.py runs it on linux64 and, under
+ * stderr). With MFBD_MASTER_LOG set (e.g. to logStatistics), logging is on
+ * for that category, so benchmarks/architecture_cost.py can read the
+ * solver's statistics from stderr. tests/python/test_platforms.py runs it on linux64 and, under
  * Wine, on win64, and compares the rows. */
 #define __USE_MINGW_ANSI_STDIO 1 /* C99 printf under MinGW: 17 exact digits */
 #include <ctype.h>
@@ -92,6 +94,7 @@ int main(int argc, char **argv) {
   FUNCTION(fmi2SetRealTYPE *, fmi2SetReal)
   FUNCTION(fmi2TerminateTYPE *, fmi2Terminate)
   FUNCTION(fmi2FreeInstanceTYPE *, fmi2FreeInstance)
+  FUNCTION(fmi2SetDebugLoggingTYPE *, fmi2SetDebugLogging)
 
   char uri[8192];
   if (!resourceUri(argv[2], uri, sizeof uri)) {
@@ -115,8 +118,11 @@ int main(int argc, char **argv) {
   }
 
   const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
-  fmi2Component c = fmi2Instantiate("master", fmi2CoSimulation, argv[3], uri, &callbacks, fmi2False, fmi2False);
+  const char *category = getenv("MFBD_MASTER_LOG");
+  const fmi2Boolean logging = category && *category ? fmi2True : fmi2False;
+  fmi2Component c = fmi2Instantiate("master", fmi2CoSimulation, argv[3], uri, &callbacks, fmi2False, logging);
   if (!c) return 1;
+  if (logging && fmi2SetDebugLogging(c, fmi2True, 1, &category) != fmi2OK) return 1;
   const long steps = lround((stop - start) / step);
   int ok = fmi2SetupExperiment(c, fmi2False, 0.0, start, fmi2True, stop) == fmi2OK &&
            (starts == 0 || fmi2SetReal(c, startReferences, starts, startValues) == fmi2OK) &&
