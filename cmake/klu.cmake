@@ -15,6 +15,10 @@
 # needs libklu.so.1 at run time and is never packed.
 include_guard(GLOBAL)
 option(MFBD_SYSTEM_KLU "Link the system's shared KLU (pre-portability benchmarks only)" OFF)
+if(MFBD_SYSTEM_KLU AND NOT MFBD_FMU_ONLY)
+  message(FATAL_ERROR "MFBD_SYSTEM_KLU=ON builds an FMU binary alone (add -DMFBD_FMU_ONLY=ON): "
+                      "packed FMUs carry the pinned KLU and its licences")
+endif()
 set(MFBD_KLU_SOURCE_DIR "" CACHE PATH "Folder of the klujax 0.2.0 sdist (default: downloaded)")
 if(NOT MFBD_KLU_SOURCE_DIR AND NOT MFBD_SYSTEM_KLU)
   include(FetchContent)
