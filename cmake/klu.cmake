@@ -8,9 +8,19 @@
 # fetches; mfbd_add_klu() defines the library; mfbd_stage_licenses(DIR)
 # puts the licences of what the FMU binaries link into DIR, which the
 # packer copies into every FMU as documentation/licenses.
+#
+# MFBD_SYSTEM_KLU=ON links the system's shared KLU instead (Debian's
+# libsuitesparse-dev, SuiteSparse 5.12), as the linux64 binary did before
+# issue 19: only for benchmarks/platform_speed.py's "before" binary, which
+# needs libklu.so.1 at run time and is never packed.
 include_guard(GLOBAL)
+option(MFBD_SYSTEM_KLU "Link the system's shared KLU (pre-portability benchmarks only)" OFF)
+if(MFBD_SYSTEM_KLU AND NOT MFBD_FMU_ONLY)
+  message(FATAL_ERROR "MFBD_SYSTEM_KLU=ON builds an FMU binary alone (add -DMFBD_FMU_ONLY=ON): "
+                      "packed FMUs carry the pinned KLU and its licences")
+endif()
 set(MFBD_KLU_SOURCE_DIR "" CACHE PATH "Folder of the klujax 0.2.0 sdist (default: downloaded)")
-if(NOT MFBD_KLU_SOURCE_DIR)
+if(NOT MFBD_KLU_SOURCE_DIR AND NOT MFBD_SYSTEM_KLU)
   include(FetchContent)
   FetchContent_Declare(klujax_sdist
     URL https://files.pythonhosted.org/packages/a5/50/10d36cb6e80b9dd392492af925d56b8fc14fe9c02b3cb5975845e96708c5/klujax-0.2.0.tar.gz
@@ -24,6 +34,14 @@ if(NOT MFBD_KLU_SOURCE_DIR)
 endif()
 
 function(mfbd_add_klu)
+  if(MFBD_SYSTEM_KLU)
+    find_path(MFBD_SYSTEM_KLU_INCLUDE_DIR klu.h PATH_SUFFIXES suitesparse REQUIRED)
+    find_library(MFBD_SYSTEM_KLU_LIBRARY klu REQUIRED)
+    add_library(SuiteSparse::KLU INTERFACE IMPORTED GLOBAL)
+    target_include_directories(SuiteSparse::KLU SYSTEM INTERFACE ${MFBD_SYSTEM_KLU_INCLUDE_DIR})
+    target_link_libraries(SuiteSparse::KLU INTERFACE ${MFBD_SYSTEM_KLU_LIBRARY})
+    return()
+  endif()
   set(root "${MFBD_KLU_SOURCE_DIR}/suitesparse")
   # The 32-bit-index real routines only (the _l, _z and _zl files are the
   # 64-bit-index and complex variants).

@@ -4,7 +4,9 @@
 # (peer_*.py, Exudyn from benchmarks/requirements.txt; the rigid + flexible ones
 # of issue 5 after the flexible ones) and the wall time at matched error
 # (peer_summary.py -> peer_summary.csv); then the per-step cost studies
-# (C++ drivers). About 12 minutes on 2 cores (see benchmarks/README.md).
+# (C++ drivers); then the linux64 binary against a pre-portability build of
+# the same source (platform_speed.py, which builds that binary first). Run
+# times: benchmarks/README.md, "How to run".
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/setup.sh"
@@ -35,3 +37,13 @@ done
 # Co-simulation: closed-loop coupling error against the communication step for
 # four masters (zero-order hold Jacobi and Gauss-Seidel, interpolation, rollback).
 .venv/bin/python benchmarks/cosim_coupling.py --out "$out"
+# Portable linux64 binary against one built the pre-portability way (issue 19):
+# instructions in fmi2DoStep (callgrind) and interleaved CPU times. The "before"
+# binary links Debian's shared KLU (libsuitesparse-dev, installed here only).
+if ! dpkg-query -W -f='${Status}' libsuitesparse-dev 2>/dev/null | grep -q "install ok installed"; then
+  sudo=""
+  [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends libsuitesparse-dev >/dev/null
+fi
+.venv/bin/python benchmarks/platform_speed.py --out "$out"
