@@ -71,6 +71,7 @@ class System : public Dynamics {
   double constraintLengthScale() const override { return constraintLengthScale_; }
   double tangentCost() const override;
   bool elasticCoordinates() const override;
+  bool flexibleBodies() const override { return !model_.flexible.nodes.empty(); }
   void turnWithRotations(const Configuration& from, const Configuration& to, VectorXd& x,
                          bool transpose) const override;
   void turnOverStep(const Configuration& q, const VectorXd& v, double h, VectorXd& x) const override;

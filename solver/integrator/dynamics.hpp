@@ -57,6 +57,10 @@ class Dynamics {
   // corrections far below its coordinates' ulps (they add to the substep's
   // increment, not to the coordinates).
   virtual bool elasticCoordinates() const { return true; }
+  // Whether the system has flexible bodies: modes stiff by construction
+  // (a beam's axial and shear modes) that substeps are not meant to
+  // resolve, removed by the integrator's numerical damping.
+  virtual bool flexibleBodies() const { return false; }
   // What a fresh tangent costs, in residual evaluations: an estimate from
   // the system's structure (deterministic, unlike a timing), for the
   // integrator's choice between refreshing the Newton matrix and iterating

@@ -46,11 +46,20 @@ class GeneralizedAlpha : public TimeStepper {
 
  protected:
   bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why) override;
-  void beginAdvance(const Dynamics& system) override { refresh_.beginAdvance(system.tangentCost()); }
+  void beginAdvance(const Dynamics& system) override {
+    refresh_.beginAdvance(system.tangentCost());
+    perUnitStep_ = !system.flexibleBodies();
+  }
   bool errorControlled() const override { return options_.errorTolerance > 0.0; }
-  // Error per unit step: the estimate goes as h^3, its ratio to the local
-  // error allowed (proportional to h) as h^2.
-  StepControl stepControl() const override { return {2.0, 1.25}; }
+  // The local error a substep may make (see localError): per unit step,
+  // tol L h / T, where the local errors add up over the run; per step, tol
+  // L, with flexible bodies.
+  double allowedError(double h) const {
+    return perUnitStep_ ? allowedLocalError(h) : options_.errorTolerance * options_.errorScale;
+  }
+  // The estimate goes as h^3: its ratio to the error allowed as h^2 per
+  // unit step, h^3 per step.
+  StepControl stepControl() const override { return {perUnitStep_ ? 2.0 : 3.0, 1.25}; }
 
  private:
   friend class SubstepNewton;
@@ -66,6 +75,7 @@ class GeneralizedAlpha : public TimeStepper {
   void projectVelocities(Dynamics& system, IntegratorState& trial, double gammaPrime);
 
   double alphaM_, alphaF_, gamma_, beta_;
+  bool perUnitStep_ = true;  // of the system advanced (beginAdvance)
   LinearSolver solver_;
   MatrixRefreshPolicy refresh_;
   IntegratorState trial_;  // substep workspace (see substep)

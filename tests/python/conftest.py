@@ -125,3 +125,13 @@ def slave(pendulum_fmu):
     yield s
     s.free()
     shutil.rmtree(s.unzip_dir, ignore_errors=True)
+
+
+def simulate_fixed_step(fmu, **options):
+    """fmpy's simulate_fmu without an FMI tolerance (fmpy otherwise passes
+    the DefaultExperiment's): substeps of solver.h_max, for tests of what a
+    fixed step does (its order, its energy drift)."""
+    from fmpy import simulate_fmu
+    md = read_model_description(str(fmu))
+    md.defaultExperiment.tolerance = None
+    return simulate_fmu(str(fmu), model_description=md, relative_tolerance=None, **options)
