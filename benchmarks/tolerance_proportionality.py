@@ -32,7 +32,9 @@ tolerance, the band [0.1, 10] shaded)."""
 import argparse
 import pathlib
 import re
+import shutil
 import sys
+import tempfile
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -178,8 +180,7 @@ def main():
     args = parser.parse_args()
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    folder = out / "proportionality_fmus"
-    folder.mkdir(exist_ok=True)
+    folder = pathlib.Path(tempfile.mkdtemp(prefix="mfbd-proportionality-"))  # the packed scenes
     rows = []
     for label in args.problems:
         problem = PROBLEMS[label](folder)
@@ -193,6 +194,7 @@ def main():
             print(f"{label} tol {tolerance:.0e}: error {row['error']:.3g} ({row['ratio']:.3g} x tol), "
                   f"{row['wall_time_s'] * 1e3:.1f} ms, {row['substeps']} substeps ({row['rejected']} rejected), "
                   f"{row['integrator']}", flush=True)
+    shutil.rmtree(folder, ignore_errors=True)
     write_csv(out / "tolerance_proportionality.csv", rows)
     plot(rows, out / "tolerance_proportionality.png")
 
