@@ -44,7 +44,12 @@ IntegratorChoice chooseIntegrator(const Scene& scene, System& system, SolverOpti
   }
   if (options.errorTolerance <= 0.0)
     return generalizedAlpha(options, "no error tolerance (fmi2SetupExperiment without one): substeps of h_max");
-  if (flexible) return generalizedAlpha(options, "flexible bodies (stiff)");
+  if (flexible)
+    return generalizedAlpha(options, std::string("flexible bodies (stiff)") +
+                                         (options.errorTolerance < 1e-5
+                                              ? "; their error is held per step, which below a tolerance of 1e-5 "
+                                                "may end above it (docs/design.md, Error control)"
+                                              : ""));
   // Below the output interval h_max caps the substeps: there a substep of
   // generalized-alpha (Newton with a kept matrix) costs a fraction of the
   // explicit method's six stage solves, and the explicit method's order
