@@ -238,6 +238,23 @@ def test_sweep_command_reports_discarded_runs(tmp_path):
     assert [float(row.split(",")[0]) for row in rows[1:]] == list(expected)
 
 
+def test_runs_are_error_controlled_by_the_default_experiment_tolerance():
+    # The pendulum at h_max = 0.1 s (the communication step): given the
+    # DefaultExperiment's tolerance (1e-4) and stop time, the FMU controls
+    # the error (Dormand-Prince); with --relative-tolerance 0, fixed
+    # substeps of 0.1 s. Bob position at 2 s against the pendulum's ODE.
+    from scipy.integrate import solve_ivp
+    theta = solve_ivp(lambda t, y: [y[1], -9.81 * np.cos(y[0])], (0, 2.0), [0.0, 0.0], method="DOP853",
+                      rtol=1e-13, atol=1e-13).y[0, -1]
+    errors = {}
+    for tolerance in (None, 0):
+        r = runner.simulate(FMUS / "pendulum.fmu", {"solver.h_max": 0.1}, ["bob.position.x", "bob.position.y"],
+                            2.0, 0.1, progress=False, relative_tolerance=tolerance)
+        errors[tolerance] = np.hypot(r.values["bob.position.x"][-1] - np.cos(theta),
+                                     r.values["bob.position.y"][-1] - np.sin(theta))
+    assert errors[None] < 1e-3 < errors[0], errors
+
+
 def test_the_last_step_ends_at_the_stop_time():
     r = runner.simulate(FMUS / "pendulum.fmu", outputs=["hinge.angle"], stop_time=1.0, step=0.3, progress=False)
     np.testing.assert_allclose(r.time, [0, 0.3, 0.6, 0.9, 1.0], atol=1e-15)
