@@ -24,7 +24,8 @@ namespace mfbd {
 namespace {
 
 constexpr char kMagic[8] = {'M', 'F', 'B', 'D', 'S', 'T', 'A', 'T'};
-constexpr std::uint32_t kFormatVersion = 1;
+// 2: the Dormand-Prince stepper saves its redundant constraint rows.
+constexpr std::uint32_t kFormatVersion = 2;
 constexpr std::size_t kFrameBytes = sizeof kMagic + 4 + 4 + 8 + 4;  // the header and CRC around GUID and payload
 
 // CRC-32 (reflected polynomial 0xEDB88320, initial and final XOR all ones):
