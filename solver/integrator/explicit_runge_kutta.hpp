@@ -57,6 +57,9 @@ class DormandPrince : public TimeStepper {
     TimeStepper::loadState(ar);
     solver_.saveOrLoad(ar);
     ar(dependentRows_);
+    for (std::size_t k = 0; k < dependentRows_.size(); ++k)
+      if (dependentRows_[k] < 0 || (k > 0 && dependentRows_[k] <= dependentRows_[k - 1]))
+        throw StateError("its redundant constraint rows are not increasing row numbers");
   }
 
   // The spectral radius of the Jacobian of (delta, v)' at the state (1/s):
@@ -99,8 +102,11 @@ class DormandPrince : public TimeStepper {
   // constraintRank: their right-hand sides are made consistent with the
   // other rows' before each solve (see makeConsistent).
   void findDependentRows(Dynamics& system, const IntegratorState& at);
-  void makeConsistent(Dynamics& system, Eigen::Ref<VectorXd> rows) const;
-  std::vector<int> dependentRows_;
+  void fitDependentRows(const Dynamics& system);
+  void makeConsistent(Eigen::Ref<VectorXd> rows) const;
+  std::vector<int> dependentRows_;  // increasing (the state); the rest is derived
+  std::vector<int> independentRows_;
+  Eigen::MatrixXd consistency_;     // dependent rows in the independent ones, at the last assembly
 
   LinearSolver solver_;
   IntegratorState stage_;  // the stage under way (t, q, v)

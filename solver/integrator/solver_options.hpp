@@ -19,13 +19,13 @@ struct SolverOptions {
   // of a conservative system), so the default is near round-off.
   double tolerance = 1e-14;
   int maxIterations = 12;
-  // Error control (the FMI tolerance, fmi2SetupExperiment): error per unit
-  // step. Each substep of size h keeps its local error, estimated in the
-  // position coordinates (m, rad) and in the velocities (per s), below
-  // errorTolerance * errorScale * h / errorHorizon, so that the local errors
-  // of a whole experiment add up to the tolerance (rad against errorScale /
-  // 1 m). 0: no control, substeps of h_max. errorScale is the scene's length
-  // scale, errorHorizon the experiment's duration (s).
+  // Error control (the FMI tolerance, fmi2SetupExperiment), meant for the
+  // error at the end of an experiment of duration errorHorizon (s), in
+  // units of errorScale, the scene's length scale (rad against errorScale /
+  // 1 m). How each stepper holds it per substep (per unit step, tol L h /
+  // T; per step) is said where it does (TimeStepper::allowedLocalError,
+  // GeneralizedAlpha::allowedError, DormandPrince::errorRatio). 0: no
+  // control, substeps of h_max.
   double errorTolerance = 0.0;
   double errorScale = 1.0;
   double errorHorizon = 1.0;

@@ -155,7 +155,9 @@ bool TimeStepper::jumpVelocities(Dynamics& system, IntegratorState& state, const
 double TimeStepper::stepFactor(double ratio, double low, double high) const {
   if (!(ratio > 0.0)) return high;
   const double k = stepControl().exponent;
-  const double root = k == 2.0 ? std::sqrt(1.0 / ratio) : k == 3.0 ? std::cbrt(1.0 / ratio) : std::pow(1.0 / ratio, 1.0 / k);
+  const double root = k == 2.0   ? std::sqrt(1.0 / ratio)
+                      : k == 3.0 ? std::cbrt(1.0 / ratio)
+                                 : std::pow(1.0 / ratio, 1.0 / k);
   return std::clamp(0.9 * root, low, high);
 }
 
