@@ -318,8 +318,10 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     }
   }
   trial.substeps = s.substeps + 1;
-  trial.vdotBefore = s.vdot;
-  trial.lambdaBefore = s.lambda;
+  // s becomes the workspace (swapped below): its vdot and lambda move into
+  // the history rather than being copied.
+  trial.vdotBefore.swap(s.vdot);
+  trial.lambdaBefore.swap(s.lambda);
   trial.hBefore = h;
   trial.rejectedSubsteps = s.rejectedSubsteps;
   if (alphaM_ == alphaF_ && system.constraintCount() > 0) projectVelocities(system, trial, problem.gammaPrime());
