@@ -605,7 +605,13 @@ def extrapolated_references(label, runs, meshes, key, column):
 
 
 def mesh_and_step(row):
-    """Annotation of a run over elements and substep: "n / h"."""
+    """Annotation of a run over elements and substep: "n / h"; of a run
+    driven by a tolerance: "tol" and its value; of a run at a substep h
+    only: h."""
+    if row.get("tolerance") not in (None, ""):
+        return f"tol {float(row['tolerance']):.0e}"
+    if row.get("h_s") in (None, ""):
+        return _short(row["h_or_elements"])
     return f"{_short(row['h_or_elements'])}/{float(row['h_s']):.0e}"
 
 
