@@ -39,9 +39,12 @@ tolerance 1e-3 ... 1e-8 over the 0.4 s (stopTime passed), h_max = the
 output interval 1e-3 s, the FMU's choice of integrator (generalized-alpha,
 the local error held per substep for flexible bodies), Newton tolerance
 following the error tolerance. One mesh, n = 32 (the finest of the pairs;
-its run at tolerance 1e-7 is 6.8e-8 m from the n = 64 reference, so its
-spatial error is below that, far below the levels compared, 1e-3 ... 1e-5
-m); error against our reference as for every run of ours. The tolerance is in the CSV (column tolerance, and elements).
+its runs at tolerance 1e-7 and 1e-8 are 6.8e-8 and 3.9e-7 m from the
+n = 64 reference, whose own time error, about a quarter of n = 32's
+1.4e-6 m at twice its step, is about 4e-7 m: the spatial error is below
+that, far below the levels compared, 1e-3 ... 1e-5 m, and the measure
+resolves nothing under about 4e-7 m); error against our reference as for
+every run of ours. The tolerance is in the CSV (column tolerance, and elements).
 Exudyn's explicit solvers are left out: they do not take the crank's
 ObjectJointRevolute2D ("explicit integrator detected object ... which
 contains constraints that cannot be solved", at once, DOPRI5 tried).
