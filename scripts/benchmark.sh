@@ -24,7 +24,7 @@ for study in peer_r2_double_pendulum peer_r3_n_four_bar peer_r4_bricard peer_r5_
   .venv/bin/python "benchmarks/$study.py" --out "$out"
 done
 .venv/bin/python benchmarks/peer_summary.py --out "$out"
-# Error reached against the FMI tolerance (R1, R2, R4, R5, F3, F4).
+# Error reached against the FMI tolerance (R1, R2, R4, R5, F3, F4, F5).
 .venv/bin/python benchmarks/tolerance_proportionality.py --out "$out"
 # Per-step cost of the flexible mesh against element count (C++ driver, built here),
 # alone and with rigid bodies attached.
