@@ -226,7 +226,7 @@ void System::forceElementTangent(double t, double cC, double cK, Triplets& itera
   const double eps = 1e-7;
   for (const ForceElement& e : model_.forces) {
     const int ends[2] = {e.marker1.body, e.kind == ForceElement::Kind::AppliedForce ? kGroundIndex : e.marker2.body};
-    const ForceElementWrenches w0 = forceElementWrenches(e, forceInputsNow(), t, data_);
+    const ForceElementWrenches w0 = forceElementWrenches(e, forceSignals_.current(), t, data_);
     for (int side = 0; side < 2; ++side) {
       const int moved = ends[side];
       if (moved == kGroundIndex) continue;
@@ -242,7 +242,7 @@ void System::forceElementTangent(double t, double cC, double cK, Triplets& itera
         }
         if (d < 3) k.velocity[d] += twist;
         else k.angularVelocity[d - 3] += twist;
-        const ForceElementWrenches w1 = forceElementWrenches(e, forceInputsNow(), t, data_);
+        const ForceElementWrenches w1 = forceElementWrenches(e, forceSignals_.current(), t, data_);
         k = saved;
         const double factor = -(cK != 0.0 ? cK : cC) / eps;
         for (int on = 0; on < 2; ++on) {

@@ -13,10 +13,7 @@ namespace mfbd {
 
 System::System(Model model)
     : model_(std::move(model)),
-      data_(model_),
-      jointInputs_(VectorXd::Zero(model_.jointInputCount)),
-      flexibleInputs_(VectorXd::Zero(model_.flexible.inputCount)),
-      forceInputs_(VectorXd::Zero(model_.forceInputCount)) {
+      data_(model_) {
   jointSignals_.resize(model_.jointInputCount);
   flexibleSignals_.resize(model_.flexible.inputCount);
   forceSignals_.resize(model_.forceInputCount);
@@ -60,12 +57,10 @@ double System::driveCoordinate(const Joint& joint, double t) const {
          jointSignals_.integral(joint.inputOffset, jointDriveStepStart_, t);
 }
 
-// Only moving inputs are evaluated: held ones are read where they are set
-// (the *InputsNow accessors), not copied at every residual.
 void System::inputsAt(double t) {
-  if (jointSignals_.moving) jointSignals_.evaluate(t, jointInputs_);
-  if (forceSignals_.moving) forceSignals_.evaluate(t, forceInputs_);
-  if (flexibleSignals_.moving) flexibleSignals_.evaluate(t, flexibleInputs_);
+  jointSignals_.evaluate(t);
+  forceSignals_.evaluate(t);
+  flexibleSignals_.evaluate(t);
 }
 
 bool System::stateFits() const {
@@ -117,7 +112,7 @@ void System::jointForces(const Configuration& q, const VectorXd& v, VectorXd& ta
     auto t = tau.segment(j.velocityOffset, j.dofs);
     t = -(j.damping + j.springDamping) * v.segment(j.velocityOffset, j.dofs);
     if (j.springStiffness != 0.0) t[0] -= j.springStiffness * (q.scalars[j.scalarOffset] - j.springFreeCoordinate);
-    if (j.actuated) t += jointInputsNow().segment(j.inputOffset, j.dofs);
+    if (j.actuated) t += jointSignals_.current().segment(j.inputOffset, j.dofs);
   }
 }
 
@@ -131,7 +126,7 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
     data_.appliedForce[i] = model_.bodies[i].mass * model_.gravity;
     data_.appliedTorque[i].setZero();
   }
-  applyForceElements(model_.forces, forceInputsNow(), t, data_);
+  applyForceElements(model_.forces, forceSignals_.current(), t, data_);
   phi.setZero(model_.constraintCount);
   constraintLengthScale_ = 1.0;
   twoMarkerRowsAndForces(lambda, phi, nodeRows);
@@ -150,7 +145,7 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
   if (!model_.flexible.empty()) {
     flexibleNodeStates(model_.flexible, q, v, vdot, t, drives_, flexibleSignals_, nodes_);
     const bool inertia = model_.analysis == Analysis::Dynamic;
-    failed = !flexibleResidual(model_.flexible, nodes_, model_.gravity, flexibleInputsNow(), t, inertia, r);
+    failed = !flexibleResidual(model_.flexible, nodes_, model_.gravity, flexibleSignals_.current(), t, inertia, r);
   }
   phi.resize(0);
   if (!model_.bodies.empty()) {
@@ -202,7 +197,7 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
     constraintRows(false, constraintJacobian);
   if (!model_.flexible.empty()) {
     const bool inertia = model_.analysis == Analysis::Dynamic;
-    flexibleTangent(model_.flexible, nodes_, model_.gravity, flexibleInputsNow(), t, inertia, inertia ? cM : 0.0,
+    flexibleTangent(model_.flexible, nodes_, model_.gravity, flexibleSignals_.current(), t, inertia, inertia ? cM : 0.0,
                     inertia ? cC : 0.0, cK, iteration);
   }
   twoMarkerStiffness(lambda, cK, recursive, iteration);

@@ -37,7 +37,7 @@ class System : public Dynamics {
   VectorXd& flexibleInputs() { return flexibleSignals_.value; }
   const VectorXd& flexibleInputs() const { return flexibleSignals_.value; }
   // Force-element inputs at the time of the last evaluation (outputs).
-  const VectorXd& forceInputsNow() const { return forceSignals_.moving ? forceInputs_ : forceSignals_.value; }
+  const VectorXd& forceInputsNow() const { return forceSignals_.current(); }
   // Rate-input drives integrate their angle; fold it in at each step end.
   const DriveState& driveState() const { return drives_; }
   void setDriveState(const DriveState& d) { drives_ = d; }
@@ -151,15 +151,10 @@ class System : public Dynamics {
 
   Model model_;
   Data data_;
+  // Read through current(): the inputs at the time of the evaluation under
+  // way (inputsAt).
   InputSignals jointSignals_, flexibleSignals_, forceSignals_;
-  // The inputs at the time of the evaluation under way (inputsAt): held
-  // ones are read from their signals, moving ones from these vectors.
-  VectorXd jointInputs_, flexibleInputs_, forceInputs_;
   void inputsAt(double t);
-  const VectorXd& jointInputsNow() const { return jointSignals_.moving ? jointInputs_ : jointSignals_.value; }
-  const VectorXd& flexibleInputsNow() const {
-    return flexibleSignals_.moving ? flexibleInputs_ : flexibleSignals_.value;
-  }
   DriveState drives_;
   std::vector<double> jointDriveStart_;  // per joint: a rate-input drive's coordinate at the step start
   double jointDriveStepStart_ = 0.0;

@@ -49,21 +49,22 @@ struct InputSignals {
     const double a = t - anchor[i], b = from - anchor[i];  // a^k - b^k = h (...)
     return h * (value[i] + d1[i] * 0.5 * (a + b) + d2[i] * (a * a + a * b + b * b) / 6.0);
   }
-  // All inputs at t into `out` (the vector the forces read).
-  void evaluate(double t, Eigen::VectorXd& out) const {
-    if (!moving) {
-      out = value;
-      return;
-    }
-    out.resize(value.size());
-    for (int i = 0; i < int(value.size()); ++i) out[i] = at(i, t);
+  // All inputs at t, for the forces to read through current(): held ones
+  // are read where they are set, not copied at every evaluation.
+  void evaluate(double t) {
+    if (!moving) return;
+    now_.resize(value.size());
+    for (int i = 0; i < int(value.size()); ++i) now_[i] = at(i, t);
   }
+  // The inputs at the time of the last evaluate().
+  const Eigen::VectorXd& current() const { return moving ? now_ : value; }
   template <class Archive>
   void visitState(Archive& ar) {
     ar(value, d1, d2, anchor, movingCount, moving);
   }
 
  private:
+  Eigen::VectorXd now_;  // evaluate()'s inputs while some move
   void setDerivatives(int i, double first, double second) {
     movingCount += int(first != 0.0 || second != 0.0) - int(d1[i] != 0.0 || d2[i] != 0.0);
     d1[i] = first;
