@@ -163,6 +163,16 @@ class FmuRun:
         return samples, wall, statistics
 
 
+def our_run(fmu, h, output, stop, tolerance=None, parameters=None):
+    """Our FMU at substeps of h, or (tolerance) driven by fmi2SetupExperiment's
+    error tolerance over the run (stopTime `stop`) with h_max the output
+    interval: the FMU then chooses the integrator (generalized-alpha, the
+    error held per substep, for flexible bodies) and the substeps."""
+    if tolerance:
+        return FmuRun(fmu, {"solver.h_max": output, **(parameters or {})}, tolerance=tolerance, stop_time=stop)
+    return FmuRun(fmu, {"solver.h_max": h, **(parameters or {})})
+
+
 def fmu_loop():
     """benchmarks/fmu_loop.c's sample(), built (cc -O2) into the build folder
     when missing or older than its source."""

@@ -39,7 +39,7 @@ Writes f3_vibration_precision.csv and .png.
 import numpy as np
 from scipy.optimize import least_squares
 
-from peer_common import EXUDYN, OURS, FmuRun, Panel, PeerStudy, cantilever_scene, exudyn_beam_line_2d, \
+from peer_common import EXUDYN, OURS, Panel, PeerStudy, our_run, cantilever_scene, exudyn_beam_line_2d, \
     exudyn_clamp_coordinates, exudyn_explicit_settings, exudyn_settings, exudyn_solve, mesh_and_step, refinement_grid
 
 L, EI, RHO_A, EA, RHO_I = 1.0, 1.0, 1.0, 1e6, 1e-6
@@ -89,15 +89,9 @@ def vibration_scene(n):
 
 
 def ours(fmu, signal, h, modes=EXACT, tolerance=None):
-    """f1 of our run: `signal` (a tip's y) sampled every OUTPUT from t = OUTPUT on.
-    Substeps of h, or (tolerance) driven by fmi2SetupExperiment's error
-    tolerance over the run (stopTime STOP), h_max the output interval: the
-    FMU chooses the integrator (generalized-alpha, the error held per
-    substep for flexible bodies) and the substeps."""
-    if tolerance:
-        run = FmuRun(fmu, {"solver.h_max": OUTPUT}, tolerance=tolerance, stop_time=STOP)
-    else:
-        run = FmuRun(fmu, {"solver.h_max": h})
+    """f1 of our run (peer_common.our_run): `signal` (a tip's y) sampled
+    every OUTPUT from t = OUTPUT on."""
+    run = our_run(fmu, h, OUTPUT, STOP, tolerance)
     s, wall, statistics = run.sample([signal], STOP, OUTPUT)
     tip = s[1:, 0]  # from t = OUTPUT on
     t = OUTPUT * np.arange(1, len(tip) + 1)

@@ -48,7 +48,7 @@ Writes f4_spin_up_precision.csv, f4_spin_up_reference.csv and f4_spin_up_precisi
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, Panel, PeerStudy, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
+from peer_common import EXUDYN, OURS, Panel, PeerStudy, our_run, exudyn_beam_line_2d, exudyn_clamp_coordinates, \
     exudyn_explicit_settings, exudyn_settings, exudyn_solve, exudyn_spin_up_drive, extrapolated_references, extrapolated_value, load_scene, \
     mesh_and_step, refinement_grid, spin_up_angle
 
@@ -97,14 +97,8 @@ def spin_up_scene(n):
 
 
 def ours(fmu, n, h, stop, tolerance=None):
-    """Substeps of h, or (tolerance) driven by fmi2SetupExperiment's error
-    tolerance over the run (stopTime `stop`), h_max the output interval:
-    the FMU chooses the integrator (generalized-alpha, the error held per
-    substep for flexible bodies) and the substeps."""
-    if tolerance:
-        run = FmuRun(fmu, {"solver.h_max": OUTPUT, "solver.rho_inf": RHO_INF}, tolerance=tolerance, stop_time=stop)
-    else:
-        run = FmuRun(fmu, {"solver.h_max": h, "solver.rho_inf": RHO_INF})
+    """Substeps of h, or driven by a tolerance (peer_common.our_run)."""
+    run = our_run(fmu, h, OUTPUT, stop, tolerance, {"solver.rho_inf": RHO_INF})
     names = [f"beam.node{i}.position.{c}" for i in range(n + 1) for c in "xy"]
     s, wall, statistics = run.sample(names, stop, OUTPUT)
     samples = s[1:]  # from t = OUTPUT on

@@ -54,7 +54,7 @@ f5_slider_crank_precision.png (error against wall time; the curves).
 
 import numpy as np
 
-from peer_common import EXUDYN, OURS, FmuRun, Panel, PeerStudy, draw_curves, exudyn_beam_line_2d, exudyn_settings, \
+from peer_common import EXUDYN, OURS, Panel, PeerStudy, our_run, draw_curves, exudyn_beam_line_2d, exudyn_settings, \
     exudyn_solve, exudyn_spin_up_drive, figure, load_scene, save_figure, sweep
 
 CRANK, ROD, OMEGA, T_UP = 0.15, 0.30, 150.0, 0.15
@@ -92,14 +92,8 @@ def slider_crank_scene(n):
 
 
 def ours(fmu, n, h, tolerance=None):
-    """Substeps of h, or (tolerance) driven by fmi2SetupExperiment's error
-    tolerance over the run (stopTime STOP), h_max the output interval: the
-    FMU chooses the integrator (generalized-alpha, the error held per
-    substep for flexible bodies) and the substeps."""
-    if tolerance:
-        run = FmuRun(fmu, {"solver.h_max": OUTPUT}, tolerance=tolerance, stop_time=STOP)
-    else:
-        run = FmuRun(fmu, {"solver.h_max": h})
+    """Substeps of h, or driven by a tolerance (peer_common.our_run)."""
+    run = our_run(fmu, h, OUTPUT, STOP, tolerance)
     names = [f"rod.node{i}.position.{c}" for i in (0, n // 2, n) for c in "xy"]
     s, wall, statistics = run.sample(names, STOP, OUTPUT)
     p = s[1:].reshape(-1, 3, 2)  # from t = OUTPUT on
