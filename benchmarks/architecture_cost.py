@@ -137,7 +137,9 @@ CASES = [
 def case_settings(module_name, scene_of, run_of):
     """The scene and the recorded run settings of one case."""
     m = study(module_name)
+    # The study may make its run itself or through peer_common.our_run.
     m.FmuRun = Recorder
+    shared, peer_common.FmuRun = peer_common.FmuRun, Recorder
     scene = scene_of(m)
     try:
         run_of(m)
@@ -145,6 +147,8 @@ def case_settings(module_name, scene_of, run_of):
         pass
     else:
         raise RuntimeError(f"{module_name}.ours ran no FmuRun")
+    finally:
+        peer_common.FmuRun = shared
     return scene, Recorder.last
 
 
