@@ -278,6 +278,8 @@ void GeneralizedAlpha::predict(Dynamics& system, const IntegratorState& s, doubl
     trial.vdot = s.vdot + ratio * (s.vdot - s.vdotBefore);
     trial.lambda = s.lambda + ratio * (s.lambda - s.lambdaBefore);
   } else {
+    trial.vdot = s.vdot;
+    trial.lambda = s.lambda;
     system.turnOverStep(s.q, s.v, h, trial.vdot);
   }
   trial.a = ((1.0 - alphaF_) * trial.vdot + alphaF_ * s.vdot - alphaM_ * s.a) / (1.0 - alphaM_);
@@ -287,9 +289,15 @@ void GeneralizedAlpha::predict(Dynamics& system, const IntegratorState& s, doubl
 }
 
 bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
+  // The trial starts from s in what predict() does not set; the history
+  // is replaced when the substep is accepted.
   IntegratorState& trial = trial_;
-  trial = s;
   trial.t = s.t + h;
+  trial.q = s.q;
+  trial.pathRate = s.pathRate;
+  trial.h = s.h;
+  trial.newtonIterations = s.newtonIterations;
+  trial.factorizations = s.factorizations;
   predict(system, s, h, trial);
 
   SubstepNewton problem(*this, system, s, trial, h);
