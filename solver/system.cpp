@@ -135,6 +135,24 @@ void System::rigidResidual(double t, const Configuration& q, const VectorXd& v, 
   driveRowsAndForces(t, q, lambda, phi, r);
 }
 
+// Composite rigid bodies and a dense Cholesky factor (Featherstone 2008,
+// ch. 6): for a small tree with neither constraints nor flexible bodies a
+// stage of an explicit method needs M^-1 Q alone, which the sparse
+// iteration matrix (assembled as triplets, a second forward pass, a sparse
+// LU) computes at several times the cost. The residual at vdot = 0 is -Q,
+// and leaves the forward pass at q in data_ for the mass matrix.
+bool System::unconstrainedAccelerations(double t, const Configuration& q, const VectorXd& v, VectorXd& vdot) {
+  constexpr int kDenseTree = 64;  // rates; a longer tree keeps the sparse, recursive form
+  const int n = model_.velocityCount;
+  if (model_.constraintCount > 0 || !model_.flexible.empty() || n > kDenseTree || n == 0) return false;
+  noAccelerations_.setZero(n);
+  residual(t, q, v, noAccelerations_, noMultipliers_, vdot, noConstraints_);
+  massFactor_.compute(jointSpaceMassMatrix(model_, data_));
+  if (massFactor_.info() != Eigen::Success) return false;
+  vdot = massFactor_.solve(-vdot);
+  return true;
+}
+
 // Node states and the flexible part first, so that the constraints' node
 // sides add to it; the tree's part after.
 void System::residual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,

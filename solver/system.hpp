@@ -3,6 +3,8 @@
 // joint-force inputs) and flexible bodies of corotational beams (supports,
 // loads, drives). Velocities: joint rates first, then free node DOFs.
 #pragma once
+#include <Eigen/Cholesky>
+
 #include "flex/flexible_mesh.hpp"
 #include "integrator/dynamics.hpp"
 #include "math/input_signals.hpp"
@@ -63,6 +65,7 @@ class System : public Dynamics {
   bool recursiveNewtonMatrix() const { return recursiveMatrix_; }
   std::vector<std::pair<int, int>> pivotOrder(double cM) const override;
   VectorXd constraintAccelerationTerm(double t, const Configuration& q, const VectorXd& v) override;
+  bool unconstrainedAccelerations(double t, const Configuration& q, const VectorXd& v, VectorXd& vdot) override;
   // Phi_q over the joint rates and node DOFs (joint space, whatever form
   // the Newton matrix takes): for assembly and the constraints' rank.
   void constraintJacobian(double t, const Configuration& q, const VectorXd& v, Triplets& jacobian);
@@ -160,6 +163,8 @@ class System : public Dynamics {
   double jointDriveStepStart_ = 0.0;
   std::vector<NodeState> nodes_;
   VectorXd tau_, rigid_;
+  VectorXd noAccelerations_, noMultipliers_, noConstraints_;  // unconstrainedAccelerations' workspace
+  Eigen::LLT<Eigen::MatrixXd> massFactor_;
   double constraintLengthScale_ = 1.0;  // of the last residual
   bool recursiveMatrix_ = false;  // Newton matrix in the recursive form (dynamics)
   std::vector<int> blockOfRate_;  // model_.blocks index of each rate

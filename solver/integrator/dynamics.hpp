@@ -25,6 +25,14 @@ class Dynamics {
   virtual void chartRate(const VectorXd& /*delta*/, const VectorXd& v, VectorXd& rate) const { rate = v; }
   virtual void residual(double t, const Configuration& q, const VectorXd& v, const VectorXd& vdot,
                         const VectorXd& lambda, VectorXd& r, VectorXd& phi) = 0;
+  // The accelerations vdot = M(q)^-1 Q(q, v, t) where the system can give
+  // them directly (a small tree without constraints: its dense joint-space
+  // mass matrix); false otherwise, and the integrator solves its iteration
+  // matrix with cM = 1.
+  virtual bool unconstrainedAccelerations(double /*t*/, const Configuration& /*q*/, const VectorXd& /*v*/,
+                                          VectorXd& /*vdot*/) {
+    return false;
+  }
   // gamma with d2/dt2 Phi = Phi_q vdot + gamma (for consistent accelerations).
   virtual VectorXd constraintAccelerationTerm(double t, const Configuration& q, const VectorXd& v) = 0;
   // Appends cM M + cC dr/dv + cK dr/dq (derivative along the retraction) to

@@ -101,6 +101,12 @@ bool DormandPrince::restartAfterInputJump(Dynamics& system, IntegratorState& sta
 bool DormandPrince::accelerations(Dynamics& system, std::string& why) {
   const int n = system.velocityCount(), m = system.constraintCount();
   IntegratorState& at = stage_;
+  if (m == 0 && system.unconstrainedAccelerations(at.t, at.q, at.v, x_)) {
+    ++factorizations_;
+    if (x_.allFinite()) return true;
+    why = "accelerations are not finite";
+    return false;
+  }
   at.vdot.setZero(n);
   at.lambda.setZero(m);
   system.residual(at.t, at.q, at.v, at.vdot, at.lambda, r_, phi_);

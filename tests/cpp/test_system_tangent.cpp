@@ -466,3 +466,57 @@ TEST(TurnedPredictor, TurnsCentripetalAccelerationsWithASpinningBody) {
   EXPECT_GT((vdot1 - vdot0).cwiseAbs().maxCoeff(), 0.05);  // the accelerations do turn
   EXPECT_LT((predicted - vdot1).cwiseAbs().maxCoeff(), 1e-13);
 }
+
+// A stage of an explicit method on a small tree takes M^-1 Q from the dense
+// joint-space mass matrix: the residual vanishes at those accelerations (to
+// round-off of M's size), on a 3D tree with every joint kind, damping and a
+// spring, at a moved state; a system with constraints or flexible bodies
+// leaves it to the iteration matrix.
+TEST(UnconstrainedAccelerations, MakeTheTreesResidualVanish) {
+  const std::string tree = R"({
+    "format": "mfbd-scene/1", "name": "tree", "gravity": [0, 0, -9.81],
+    "bodies": [
+      {"name": "a", "mass": 2.0, "inertia": [0.1, 0.2, 0.25], "position": [3.0, 2.0, 1.0]},
+      {"name": "b", "mass": 1.0, "inertia": [0.1, 0.1, 0.05], "position": [3.5, 2.5, 1.0], "center_of_mass": [0.1, 0, 0]},
+      {"name": "c", "mass": 1.5, "inertia": [0.1, 0.15, 0.2], "position": [2.5, 2.0, 1.5]},
+      {"name": "d", "mass": 0.5, "inertia": [0.02, 0.03, 0.04], "position": [2.5, 1.5, 2.0]},
+      {"name": "e", "mass": 0.8, "inertia": [0.03, 0.02, 0.04], "position": [4.0, 1.0, 0.5]}
+    ],
+    "joints": [
+      {"name": "ja", "type": "revolute", "parent": "ground", "child": "a", "position": [3, 2, 0], "axis": [0, 0.3, 1],
+       "damping": 0.4},
+      {"name": "jb", "type": "spherical", "parent": "a", "child": "b", "position": [3.3, 2.3, 1.0]},
+      {"name": "jc", "type": "prismatic", "parent": "a", "child": "c", "position": [2.8, 2.0, 1.2], "axis": [1, 0, 1]},
+      {"name": "jd", "type": "universal", "parent": "c", "child": "d", "position": [2.5, 1.8, 1.8], "axis": [0, 1, 0]},
+      {"name": "je", "type": "free", "parent": "ground", "child": "e", "position": [4.0, 1.0, 0.5]}
+    ],
+    "forces": [{"name": "spring", "type": "spring_damper", "body1": "b", "point1": [3.5, 2.5, 1.0], "body2": "e",
+                "point2": [4.0, 1.0, 0.5], "stiffness": 30, "damping": 1.5}]
+  })";
+  System system(assemble(parseScene(tree)));
+  const int n = system.velocityCount();
+  ASSERT_EQ(system.constraintCount(), 0);
+  Configuration q = system.model().initialConfiguration;
+  system.retract(q, VectorXd::LinSpaced(n, -0.7, 0.9));
+  const VectorXd v = VectorXd::LinSpaced(n, 1.5, -0.5);
+  VectorXd vdot, r, phi;
+  ASSERT_TRUE(system.unconstrainedAccelerations(0.3, q, v, vdot));
+  ASSERT_EQ(vdot.size(), n);
+  system.residual(0.3, q, v, VectorXd::Zero(n), VectorXd(), r, phi);
+  const double forces = r.cwiseAbs().maxCoeff();
+  EXPECT_GT(vdot.cwiseAbs().maxCoeff(), 1.0);  // the state is far from rest
+  system.residual(0.3, q, v, vdot, VectorXd(), r, phi);
+  EXPECT_LT(r.cwiseAbs().maxCoeff(), 1e-12 * forces) << r.transpose();
+
+  System loop(assemble(parseScene(R"({
+    "format": "mfbd-scene/1", "name": "loop", "gravity": [0, -9.81, 0],
+    "bodies": [{"name": "a", "mass": 1, "inertia": [0.1, 0.1, 0.1], "position": [0, 1, 0]}],
+    "joints": [{"name": "p", "type": "revolute", "parent": "ground", "child": "a", "position": [0, 0, 0]},
+               {"name": "c", "type": "spherical", "parent": "ground", "child": "a", "position": [0, 2, 0],
+                "cut": true}]})")));
+  EXPECT_FALSE(loop.unconstrainedAccelerations(0.0, loop.model().initialConfiguration,
+                                               VectorXd::Zero(loop.velocityCount()), vdot));
+  System coupled(assemble(parseScene(kScene)));
+  EXPECT_FALSE(coupled.unconstrainedAccelerations(0.0, coupled.model().initialConfiguration,
+                                                  VectorXd::Zero(coupled.velocityCount()), vdot));
+}

@@ -10,7 +10,8 @@
  * Exit status 0 when every call returned fmi2OK, else 1 (the FMU's log on
  * stderr). With MFBD_MASTER_LOG set (e.g. to logStatistics), logging is on
  * for that category, so benchmarks/architecture_cost.py can read the
- * solver's statistics from stderr. tests/python/test_platforms.py runs it on linux64 and, under
+ * solver's statistics from stderr. With MFBD_MASTER_TOLERANCE set, that
+ * relative tolerance goes to fmi2SetupExperiment. tests/python/test_platforms.py runs it on linux64 and, under
  * Wine, on win64, and compares the rows. */
 #define __USE_MINGW_ANSI_STDIO 1 /* C99 printf under MinGW: 17 exact digits */
 #include <ctype.h>
@@ -124,7 +125,10 @@ int main(int argc, char **argv) {
   if (!c) return 1;
   if (logging && fmi2SetDebugLogging(c, fmi2True, 1, &category) != fmi2OK) return 1;
   const long steps = lround((stop - start) / step);
-  int ok = fmi2SetupExperiment(c, fmi2False, 0.0, start, fmi2True, stop) == fmi2OK &&
+  const char *tolerance = getenv("MFBD_MASTER_TOLERANCE");
+  const fmi2Boolean toleranceDefined = tolerance && *tolerance ? fmi2True : fmi2False;
+  int ok = fmi2SetupExperiment(c, toleranceDefined, toleranceDefined ? atof(tolerance) : 0.0, start, fmi2True,
+                               stop) == fmi2OK &&
            (starts == 0 || fmi2SetReal(c, startReferences, starts, startValues) == fmi2OK) &&
            fmi2EnterInitializationMode(c) == fmi2OK && fmi2ExitInitializationMode(c) == fmi2OK;
   for (long n = 0; ok && n <= steps; ++n) {
