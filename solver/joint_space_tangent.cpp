@@ -81,7 +81,8 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
                           Triplets& constraintJacobian) {
   const int n = model_.rigidVelocityCount;
   forwardKinematics(model_, data_, q, v, vdot);
-  Eigen::MatrixXd S = cM * jointSpaceMassMatrix(model_, data_);
+  jointSpaceMassMatrix(model_, data_, massMatrix_);
+  Eigen::MatrixXd S = cM * massMatrix_;
   constraintRows(false, constraintJacobian);
   if (cC != 0.0 || cK != 0.0) {
     VectorXd r0, r1, phi;

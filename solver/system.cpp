@@ -147,7 +147,8 @@ bool System::unconstrainedAccelerations(double t, const Configuration& q, const 
   if (model_.constraintCount > 0 || !model_.flexible.empty() || n > kDenseTree || n == 0) return false;
   noAccelerations_.setZero(n);
   residual(t, q, v, noAccelerations_, noMultipliers_, vdot, noConstraints_);
-  massFactor_.compute(jointSpaceMassMatrix(model_, data_));
+  jointSpaceMassMatrix(model_, data_, massMatrix_);
+  massFactor_.compute(massMatrix_);
   if (massFactor_.info() != Eigen::Success) return false;
   vdot = massFactor_.solve(-vdot);
   return true;

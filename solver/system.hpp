@@ -163,6 +163,7 @@ class System : public Dynamics {
   double jointDriveStepStart_ = 0.0;
   std::vector<NodeState> nodes_;
   VectorXd tau_, rigid_;
+  Eigen::MatrixXd massMatrix_;  // joint-space, of rigidTangent and unconstrainedAccelerations
   VectorXd noAccelerations_, noMultipliers_, noConstraints_;  // unconstrainedAccelerations' workspace
   Eigen::LLT<Eigen::MatrixXd> massFactor_;
   double constraintLengthScale_ = 1.0;  // of the last residual

@@ -40,6 +40,9 @@ struct Data {
   // Velocity transformation B: rows [6 i, 6 i + 6) give body i's
   // [velocity; angular velocity] (world, centre of mass) per joint rate.
   Eigen::MatrixXd velocityTransformation;
+  // Each subtree's spatial inertia about the world origin (workspace of
+  // jointSpaceMassMatrix).
+  std::vector<Eigen::Matrix<double, 6, 6>> compositeInertia;
 };
 
 }  // namespace mfbd

@@ -118,7 +118,9 @@ void checkMassMatrix(const Scene& scene, const Model& model) {
   const VectorXd rest = VectorXd::Zero(model.velocityCount);
   forwardKinematics(model, data, model.initialConfiguration, rest, rest);
   computeVelocityTransformation(model, data);
-  const VectorXd x = masslessFreeMotion(jointSpaceMassMatrix(model, data), heldMotions(model, data));
+  Eigen::MatrixXd mass;
+  jointSpaceMassMatrix(model, data, mass);
+  const VectorXd x = masslessFreeMotion(mass, heldMotions(model, data));
   if (x.size() > 0) throw singularMotion(scene, model, data, x);
 }
 

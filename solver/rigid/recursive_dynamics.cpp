@@ -11,7 +11,8 @@ Data::Data(const Model& model)
       appliedTorque(model.bodies.size(), Vec3::Zero()),
       subtreeForce(model.bodies.size(), Vec3::Zero()),
       subtreeTorque(model.bodies.size(), Vec3::Zero()),
-      velocityTransformation(Eigen::MatrixXd::Zero(6 * model.bodies.size(), model.rigidVelocityCount)) {}
+      velocityTransformation(Eigen::MatrixXd::Zero(6 * model.bodies.size(), model.rigidVelocityCount)),
+      compositeInertia(model.bodies.size()) {}
 
 namespace {
 
@@ -239,13 +240,13 @@ SpatialInertia spatialInertiaAtOrigin(const Body& b, const BodyKinematics& k) {
 // subtree, accumulated tip to root, gives M_ki = S_k^T Ic_i S_i for joint k
 // on the path from body i to ground; O(n d) for depth d, where B^T M B
 // with a dense B costs O(n^2 d).
-Eigen::MatrixXd jointSpaceMassMatrix(const Model& model, const Data& data) {
+void jointSpaceMassMatrix(const Model& model, Data& data, Eigen::MatrixXd& M) {
   const int nb = int(model.bodies.size());
-  std::vector<SpatialInertia> composite(nb);
+  std::vector<SpatialInertia>& composite = data.compositeInertia;
   for (int i = 0; i < nb; ++i) composite[i] = spatialInertiaAtOrigin(model.bodies[i], data.body[i]);
   for (int i = nb - 1; i >= 0; --i)
     if (model.bodies[i].parent != kGroundIndex) composite[model.bodies[i].parent] += composite[i];
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(model.rigidVelocityCount, model.rigidVelocityCount);
+  M.setZero(model.rigidVelocityCount, model.rigidVelocityCount);
   for (int i = 0; i < nb; ++i) {
     const Joint& ji = model.joints[model.bodies[i].inboardJoint];
     if (ji.dofs == 0) continue;
@@ -260,7 +261,6 @@ Eigen::MatrixXd jointSpaceMassMatrix(const Model& model, const Data& data) {
       M.block(ji.velocityOffset, jk.velocityOffset, ji.dofs, jk.dofs) = Mki.transpose();
     }
   }
-  return M;
 }
 
 void jointReaction(const Model& model, const Data& data, int joint, Vec3& force, Vec3& torque) {

@@ -35,8 +35,8 @@ void computeVelocityTransformation(const Model& model, Data& data);
 void backwardNewtonEuler(const Model& model, Data& data, const VectorXd& jointForces, VectorXd& residual);
 
 // Joint-space mass matrix B^T M B by composite rigid bodies (after
-// forwardKinematics).
-Eigen::MatrixXd jointSpaceMassMatrix(const Model& model, const Data& data);
+// forwardKinematics), into M (resized).
+void jointSpaceMassMatrix(const Model& model, Data& data, Eigen::MatrixXd& M);
 
 // Force and torque that joint k's parent exerts on its child, expressed in the
 // child marker frame, torque about the child marker origin (after the
