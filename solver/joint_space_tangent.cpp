@@ -81,8 +81,9 @@ void System::rigidTangent(double t, const Configuration& q, const VectorXd& v, c
                           Triplets& constraintJacobian) {
   const int n = model_.rigidVelocityCount;
   forwardKinematics(model_, data_, q, v, vdot);
-  jointSpaceMassMatrix(model_, data_, massMatrix_);
-  Eigen::MatrixXd S = cM * massMatrix_;
+  Eigen::MatrixXd& S = massMatrix_;
+  jointSpaceMassMatrix(model_, data_, S);
+  S *= cM;
   constraintRows(false, constraintJacobian);
   if (cC != 0.0 || cK != 0.0) {
     VectorXd r0, r1, phi;

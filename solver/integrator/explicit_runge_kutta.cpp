@@ -101,7 +101,7 @@ bool DormandPrince::restartAfterInputJump(Dynamics& system, IntegratorState& sta
 bool DormandPrince::accelerations(Dynamics& system, std::string& why) {
   const int n = system.velocityCount(), m = system.constraintCount();
   IntegratorState& at = stage_;
-  if (m == 0 && system.unconstrainedAccelerations(at.t, at.q, at.v, x_)) {
+  if (system.unconstrainedAccelerations(at.t, at.q, at.v, x_)) {
     ++factorizations_;
     if (x_.allFinite()) return true;
     why = "accelerations are not finite";

@@ -469,8 +469,8 @@ TEST(TurnedPredictor, TurnsCentripetalAccelerationsWithASpinningBody) {
 
 // A stage of an explicit method on a small tree takes M^-1 Q from the dense
 // joint-space mass matrix: the residual vanishes at those accelerations (to
-// round-off of M's size), on a 3D tree with every joint kind, damping and a
-// spring, at a moved state; a system with constraints or flexible bodies
+// round-off of M's size), on a 3D tree of revolute, spherical, prismatic,
+// universal and free joints with damping and a spring, at a moved state; a system with constraints or flexible bodies
 // leaves it to the iteration matrix.
 TEST(UnconstrainedAccelerations, MakeTheTreesResidualVanish) {
   const std::string tree = R"({

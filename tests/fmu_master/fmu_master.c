@@ -11,8 +11,9 @@
  * stderr). With MFBD_MASTER_LOG set (e.g. to logStatistics), logging is on
  * for that category, so benchmarks/architecture_cost.py can read the
  * solver's statistics from stderr. With MFBD_MASTER_TOLERANCE set, that
- * relative tolerance goes to fmi2SetupExperiment. tests/python/test_platforms.py runs it on linux64 and, under
- * Wine, on win64, and compares the rows. */
+ * relative tolerance goes to fmi2SetupExperiment. tests/python/
+ * test_platforms.py runs it on linux64 and, under Wine, on win64, and
+ * compares the rows. */
 #define __USE_MINGW_ANSI_STDIO 1 /* C99 printf under MinGW: 17 exact digits */
 #include <ctype.h>
 #include <math.h>
