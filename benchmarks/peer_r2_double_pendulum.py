@@ -69,8 +69,11 @@ def metrics(p, v, w, angle):
 
 def ours(fmu, h, tolerance=None):
     """Substeps of h, or driven by an error tolerance (the integrator the
-    FMU chooses, h_max the sampling step, the Newton tolerance its own)."""
-    parameters = ({"solver.h_max": OUTPUT} if tolerance else
+    FMU chooses, the Newton tolerance its own; h_max the largest step
+    Exudyn's explicit solvers take, STOP / 100: sampled every OUTPUT, the
+    substeps may step past the communication points while no input
+    changes)."""
+    parameters = ({"solver.h_max": STOP / 100} if tolerance else
                   {"solver.h_max": h, "solver.rho_inf": RHO_INF, "solver.tolerance": EXUDYN_TOLERANCE})
     run = FmuRun(fmu, parameters, tolerance=tolerance)
     names = [f"bar{i}.{q}.{c}" for i in (1, 2) for q in ("position", "velocity") for c in "xy"]

@@ -207,9 +207,13 @@ AdvanceResult Simulation::doStep(double t, double H) {
         TimeStepper::jumpVelocities(system_, state_, violation);
     }
     std::string message;
-    stepper_->restartAfterInputJump(system_, state_, message);
+    stepper_->inputsJumped(system_, state_, message);
   }
-  AdvanceResult result = stepper_->advance(system_, state_, H);
+  // Held inputs let an explicit stepper step past t + H (and answer there
+  // from its dense output); one that moves would be extrapolated.
+  const bool inputsHeld = scene_.analysis == Analysis::Dynamic && !system_.jointSignals().moving &&
+                          !system_.forceSignals().moving && !system_.flexibleSignals().moving;
+  AdvanceResult result = stepper_->advance(system_, state_, H, inputsHeld);
   if (!result.ok) {
     // Where the substeps gave up, say which constraints were redundant:
     // rows that the motion cannot meet together are the usual cause.
@@ -434,7 +438,7 @@ void Simulation::loadState(StateReader& ar) {
       !sized(state_.vdot) || !sized(state_.a) || !sized(state_.pathRate) || !sized(state_.vdotBefore) ||
       (state_.lambdaBefore.size() != 0 && state_.lambdaBefore.size() != system_.constraintCount()) ||
       (state_.lambda.size() != 0 && state_.lambda.size() != system_.constraintCount()) ||
-      orientation_.size() != orientationTracked_.size() || !system_.stateFits())
+      orientation_.size() != orientationTracked_.size() || !system_.stateFits() || !stepper_->fits(state_))
     throw StateError("its sizes do not fit this scene's model");
   outputsCurrent_ = false;
   reactionsCurrent_ = false;

@@ -22,6 +22,8 @@ const DormandPrinceTableau kDormandPrince = {
      {35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0}},
     {35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0, 0.0},
     {71.0 / 57600.0, 0.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0},
+    {-12715105075.0 / 11282082432.0, 0.0, 87487479700.0 / 32700410799.0, -10690763975.0 / 1880347072.0,
+     701980252875.0 / 199316789632.0, -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0},
 };
 
 bool DormandPrince::initialize(Dynamics& system, IntegratorState& state, std::string& message) {
@@ -253,6 +255,12 @@ bool DormandPrince::project(Dynamics& system, IntegratorState& z, bool& moved, s
   return z.v.allFinite();
 }
 
+bool DormandPrince::settle(Dynamics& system, std::string& why) {
+  bool moved = false;
+  if (!project(system, stage_, moved, why)) return false;
+  return !moved || accelerations(system, why);
+}
+
 bool DormandPrince::substep(Dynamics& system, IntegratorState& s, double h, std::string& why) {
   const int n = system.velocityCount(), m = system.constraintCount();
   factorizations_ = 0;
@@ -269,11 +277,9 @@ bool DormandPrince::substep(Dynamics& system, IntegratorState& s, double h, std:
       return done(false);
     }
   }
-  bool moved = false;
-  if (!project(system, stage_, moved, why)) return done(false);
   // After a projection the first stage of the next substep is solved anew
   // at the projected state; else it is the seventh stage of this one.
-  if (moved && !accelerations(system, why)) return done(false);
+  if (!settle(system, why)) return done(false);
   s.t = stage_.t;
   std::swap(s.q, stage_.q);
   std::swap(s.v, stage_.v);
@@ -282,6 +288,72 @@ bool DormandPrince::substep(Dynamics& system, IntegratorState& s, double h, std:
   s.a = s.vdot;
   ++s.substeps;
   return done(true);
+}
+
+// The stages of the substep just accepted (from `start`, size h) as the
+// four vectors of the extension per chart coordinate and velocity: y1 - y0
+// (the order-5 solution before its projection, which the extension meets
+// at theta = 1), h k1 - (y1 - y0), (y1 - y0) - h k7 - (h k1 - (y1 - y0)),
+// h sum_i d_i k_i.
+void DormandPrince::keepExtension(const IntegratorState& start, double h) {
+  const DormandPrinceTableau& T = kDormandPrince;
+  Extension& x = extension_;
+  x.h = h;
+  x.q0 = start.q;
+  x.v0 = start.v;
+  const auto parts = [&](const std::array<VectorXd, kStages>& k, std::array<VectorXd, 4>& y) {
+    y[0] = T.b[0] * k[0];
+    y[3] = T.d[0] * k[0];
+    for (int i = 1; i < kStages; ++i) {
+      if (T.b[i] != 0.0) y[0] += T.b[i] * k[i];
+      if (T.d[i] != 0.0) y[3] += T.d[i] * k[i];
+    }
+    y[0] *= h;
+    y[3] *= h;
+    y[1] = h * k[0] - y[0];
+    y[2] = y[0] - h * k[kStages - 1] - y[1];
+  };
+  parts(kDelta_, x.delta);
+  parts(kV_, x.v);
+}
+
+bool DormandPrince::interpolate(Dynamics& system, IntegratorState& s, double beforeEnd, std::string& why) {
+  const Extension& x = extension_;
+  const int n = system.velocityCount(), m = system.constraintCount();
+  const double theta = 1.0 - beforeEnd / x.h, rest = 1.0 - theta;
+  const auto at = [&](const std::array<VectorXd, 4>& y, VectorXd& out) {
+    out = theta * (y[0] + rest * (y[1] + theta * (y[2] + rest * y[3])));
+  };
+  at(x.delta, delta_);
+  at(x.v, stage_.v);
+  stage_.v += x.v0;
+  stage_.t = s.t;
+  stage_.q = x.q0;
+  system.retract(stage_.q, delta_);
+  factorizations_ = 0;
+  const bool ok = accelerations(system, why) && settle(system, why);
+  s.factorizations += factorizations_;
+  if (!ok) return false;
+  std::swap(s.q, stage_.q);
+  std::swap(s.v, stage_.v);
+  s.vdot = x_.head(n);
+  s.lambda = x_.segment(n, m);
+  s.a = s.vdot;
+  return true;
+}
+
+bool DormandPrince::fits(const IntegratorState& like) const {
+  if (!TimeStepper::fits(like)) return false;
+  const Extension& x = extension_;
+  if (x.h == 0.0 && x.q0.scalars.size() == 0 && x.q0.rotations.empty() && x.v0.size() == 0) return true;
+  const Eigen::Index n = like.v.size();
+  const auto sized = [n](const std::array<VectorXd, 4>& y) {
+    for (const VectorXd& part : y)
+      if (part.size() != n) return false;
+    return true;
+  };
+  return x.h > 0.0 && std::isfinite(x.h) && x.q0.scalars.size() == like.q.scalars.size() &&
+         x.q0.rotations.size() == like.q.rotations.size() && x.v0.size() == n && sized(x.delta) && sized(x.v);
 }
 
 // Power iteration on J = d(delta', v')/d(delta, v) at delta = 0, each

@@ -15,6 +15,10 @@
 // Closed loops and drives: after each accepted substep the positions are
 // projected onto Phi = 0 and the velocities onto Phi_q v + Phi_t = 0, least
 // change in the mass metric, so the drift stays far below the tolerance.
+// While the inputs are held it steps past a communication point and answers
+// there from the continuous extension of order 4 (Hairer, Norsett & Wanner
+// I, II.6: Dormand and Prince's dense output), in the same chart, projected
+// like a substep's end: the substeps follow the motion, not the sampling.
 #pragma once
 #include <array>
 
@@ -31,6 +35,11 @@ struct DormandPrinceTableau {
   double a[7][6];
   double b[7];
   double e[7];
+  // The continuous extension's fourth-degree part (Hairer, Norsett &
+  // Wanner I, II.6, dense output of DOPRI5): y(t0 + theta h) = y0 +
+  // theta (y1 - y0 + (1 - theta) (h k1 - (y1 - y0) + theta (2 (y1 - y0) -
+  // h (k1 + k7) + (1 - theta) h sum_i d_i k_i))).
+  double d[7];
 };
 extern const DormandPrinceTableau kDormandPrince;
 
@@ -42,25 +51,25 @@ class DormandPrince : public TimeStepper {
   // Consistent accelerations and multipliers at the state (its own
   // factorization: a probe of the outputs leaves the stepper untouched).
   bool initialize(Dynamics& system, IntegratorState& state, std::string& message) override;
-  // The accelerations of the new inputs: the first stage of the next substep.
-  bool restartAfterInputJump(Dynamics& system, IntegratorState& state, std::string& message) override;
 
   // What carries over: the kept pattern and the linear solver's record
   // (KLU's refactorizations keep the pivot order of its last full one).
   // The step size and the first stage (vdot, lambda) are in IntegratorState.
+  // The extension of a substep taken past the state's time, if one is kept.
   void saveState(StateWriter& ar) override {
     TimeStepper::saveState(ar);
     solver_.saveOrLoad(ar);
-    ar(dependentRows_);
+    ar(dependentRows_, extension_);
   }
   void loadState(StateReader& ar) override {
     TimeStepper::loadState(ar);
     solver_.saveOrLoad(ar);
-    ar(dependentRows_);
+    ar(dependentRows_, extension_);
     for (std::size_t k = 0; k < dependentRows_.size(); ++k)
       if (dependentRows_[k] < 0 || (k > 0 && dependentRows_[k] <= dependentRows_[k - 1]))
         throw StateError("its redundant constraint rows are not increasing row numbers");
   }
+  bool fits(const IntegratorState& like) const override;
 
   // The spectral radius of the Jacobian of (delta, v)' at the state (1/s):
   // the fastest mode, oscillating or damped, that an explicit substep must
@@ -76,8 +85,13 @@ class DormandPrince : public TimeStepper {
   static constexpr double kStabilityRadius = 1.0;
 
  protected:
+  // The accelerations of the new inputs: the first stage of the next substep.
+  bool restartAfterInputJump(Dynamics& system, IntegratorState& state, std::string& message) override;
   bool substep(Dynamics& system, IntegratorState& s, double h, std::string& why) override;
   bool errorControlled() const override { return options_.errorTolerance > 0.0; }
+  bool continuousExtension() const override { return true; }
+  void keepExtension(const IntegratorState& start, double h) override;
+  bool interpolate(Dynamics& system, IntegratorState& s, double beforeEnd, std::string& why) override;
   // The estimate (order-5 minus order-4 solution) goes as h^5 and is held
   // per step (see errorRatio); no Newton matrix to keep, so no band of kept
   // sizes.
@@ -96,6 +110,26 @@ class DormandPrince : public TimeStepper {
   // last factorization (at z = stage_, whose Phi is in phi_, vdot and
   // lambda zero); `moved` if either changed.
   bool project(Dynamics& system, IntegratorState& z, bool& moved, std::string& why);
+  // stage_ (its accelerations just solved) projected, and its accelerations
+  // solved again if that moved it: a substep's end, or an answer from the
+  // extension.
+  bool settle(Dynamics& system, std::string& why);
+
+  // The continuous extension of the kept substep (read while the base
+  // class keeps that substep's end), in the chart at its start q0: the
+  // tableau's polynomial for delta (y0 = 0) and for v (y0 = v0), each as its
+  // four vectors y1 - y0, h k1 - (y1 - y0), 2 (y1 - y0) - h (k1 + k7),
+  // h sum_i d_i k_i.
+  struct Extension {
+    double h = 0.0;
+    Configuration q0;
+    VectorXd v0;
+    std::array<VectorXd, 4> delta, v;
+    template <class Archive>
+    void visitState(Archive& ar) {
+      ar(h, q0, v0, delta[0], delta[1], delta[2], delta[3], v[0], v[1], v[2], v[3]);
+    }
+  } extension_;
 
   // Redundant constraints (the Bricard mechanism: one row a combination of
   // the others along the whole motion), found at the start by

@@ -23,9 +23,6 @@ class GeneralizedAlpha : public TimeStepper {
 
   // Consistent initial accelerations (M vdot = Q at t) and a = vdot.
   bool initialize(Dynamics& system, IntegratorState& state, std::string& message) override;
-  // Accelerations, a and multipliers jump by the substep's own response to
-  // the jump of the forces (see the .cpp).
-  bool restartAfterInputJump(Dynamics& system, IntegratorState& state, std::string& message) override;
   // The (regularised) Newton matrix that a substep of size h factorizes at
   // state `at`: for diagnostics (condition number against h).
   SparseMatrix newtonMatrix(Dynamics& system, const IntegratorState& at, double h) const;
@@ -45,6 +42,9 @@ class GeneralizedAlpha : public TimeStepper {
   bool restoreNewtonMemory(Dynamics& system, const NewtonMemory& memory);
 
  protected:
+  // Accelerations, a and multipliers jump by the substep's own response to
+  // the jump of the forces (see the .cpp).
+  bool restartAfterInputJump(Dynamics& system, IntegratorState& state, std::string& message) override;
   bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why) override;
   void beginAdvance(const Dynamics& system) override {
     refresh_.beginAdvance(system.tangentCost());

@@ -89,7 +89,7 @@ Eigen::MatrixXd TimeStepper::denseJacobian(const Dynamics& system, const Triplet
 }
 
 void TimeStepper::loadState(StateReader& ar) {
-  ar(iteration_);
+  ar(iteration_, ahead_.by, ahead_.end);
   if (!iteration_.valid()) throw StateError("the saved Newton matrix's pattern is inconsistent");
 }
 
@@ -168,14 +168,20 @@ double TimeStepper::nextStep(double h, double step, double ratio) const {
   return std::min(proposal, options_.hMax);
 }
 
-AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double duration) {
+AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double duration, bool inputsHeld) {
   AdvanceResult result;
+  const bool past = inputsHeld && continuousExtension();
+  if (!past) ahead_ = {};
+  if (ahead_.by > 0.0 && duration <= ahead_.by) {
+    if (answerAhead(system, s, s.t + duration, ahead_.by - duration, result)) ahead_.by -= duration;
+    return result;
+  }
   beginAdvance(system);
   // Time within the step is kept as the time elapsed since its start: a
   // small number, exact however large s.t is (at t = 1e10 a difference of
   // absolute times has a resolution of 2e-6 s).
   const double start = s.t;
-  double elapsed = 0.0;
+  double elapsed = ahead_.by > 0.0 ? resumeAhead(s) : 0.0;
   double h = std::min(s.h > 0.0 ? s.h : options_.hMax, options_.hMax);
   double tried = 0.0;  // substeps tried, rejected ones included
   int successes = 0;
@@ -186,27 +192,29 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
     result.message = message;
     return result;
   };
+  IntegratorState from;  // the start of a substep taken past the end
   while (elapsed < duration) {
     // The rest in equal substeps of at most h (within round-off): no short
     // last one, and every substep of a run at constant h the same size, so
     // the Newton matrix of one serves the next (GeneralizedAlpha keeps it
-    // only for the same h). The last one takes exactly what is left.
+    // only for the same h). The last one takes exactly what is left, or,
+    // past the end, h.
     const double remaining = duration - elapsed;
-    const double count = std::max(1.0, std::ceil(remaining / h * (1.0 - 1e-9)));
+    const bool beyond = past && h > remaining * (1.0 + 1e-9);
+    const double count = beyond ? 1.0 : std::max(1.0, std::ceil(remaining / h * (1.0 - 1e-9)));
     if (!(tried + count <= options_.maxSubsteps)) {
       return fail(rejected + (rejected.empty() ? "the step of " : "; the step of ") + numberText(duration) +
                   " s would need " + numberText(tried + count) + " substeps of at most " + numberText(h) +
                   " s, more than solver.max_substeps = " + numberText(options_.maxSubsteps));
     }
     const bool last = count == 1.0;
-    const double step = last ? remaining : remaining / count;
+    const double step = beyond ? h : last ? remaining : remaining / count;
+    if (beyond) from = s;
     ++tried;
     std::string why;
     errorRatio_ = 0.0;
     errorRejected_ = false;
     if (substep(system, s, step, why)) {
-      elapsed = last ? duration : elapsed + step;
-      s.t = start + elapsed;
       rejected.clear();
       restoreOrthogonality(s.q);
       if (errorControlled()) {
@@ -215,24 +223,81 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
         h = std::min(2.0 * h, options_.hMax);
         successes = 0;
       }
+      if (beyond) {
+        // Keep the substep, answer at the end from its extension.
+        keepExtension(from, step);
+        ahead_ = {elapsed + step - duration, s};
+        s.h = h;
+        answerAhead(system, s, start + duration, ahead_.by, result);
+        return result;
+      }
+      elapsed = last ? duration : elapsed + step;
+      s.t = start + elapsed;
       continue;
     }
-    ++s.rejectedSubsteps;
     successes = 0;
-    const bool finite = std::isfinite(errorRatio_);
-    h = !errorRejected_ ? 0.5 * step : step * (finite ? stepFactor(errorRatio_, 0.2, 0.9) : 0.2);
-    if (errorRejected_) {
-      ++result.errorRejections;
-      result.lastRejection = "t = " + numberText(s.t) + ", h = " + numberText(step) + ": " + why;
-    }
-    rejected = "substep failed at t = " + numberText(s.t) + " with h = " + numberText(step) + " (h_min = " +
-               numberText(options_.hMin) + "): " + why;
+    h = afterRejection(s, step, why, result, rejected);
     if (h < options_.hMin) return fail(rejected);
   }
+  ahead_ = {};
   s.t = start + duration;
   s.h = h;
   result.reachedTime = s.t;
   return result;
+}
+
+// Goes on from the end of the substep kept past the last advance's end
+// (the counters stay those of s, the latest); the time elapsed there.
+double TimeStepper::resumeAhead(IntegratorState& s) const {
+  const IntegratorState& e = ahead_.end;
+  s.t += ahead_.by;
+  s.q = e.q;
+  s.v = e.v;
+  s.vdot = e.vdot;
+  s.lambda = e.lambda;
+  s.a = e.a;
+  return ahead_.by;
+}
+
+// A substep of size `step` failed for `why`: counted, described, and the
+// size to try next (half, or as its error estimate says).
+double TimeStepper::afterRejection(IntegratorState& s, double step, const std::string& why, AdvanceResult& result,
+                                   std::string& rejected) const {
+  ++s.rejectedSubsteps;
+  if (errorRejected_) {
+    ++result.errorRejections;
+    result.lastRejection = "t = " + numberText(s.t) + ", h = " + numberText(step) + ": " + why;
+  }
+  rejected = "substep failed at t = " + numberText(s.t) + " with h = " + numberText(step) + " (h_min = " +
+             numberText(options_.hMin) + "): " + why;
+  if (!errorRejected_) return 0.5 * step;
+  return step * (std::isfinite(errorRatio_) ? stepFactor(errorRatio_, 0.2, 0.9) : 0.2);
+}
+
+// s at time t from the kept substep's extension, which ends `beforeEnd`
+// later. A failure forgets the kept substep: the caller restores a state
+// the extension may no longer belong to.
+bool TimeStepper::answerAhead(Dynamics& system, IntegratorState& s, double t, double beforeEnd, AdvanceResult& result) {
+  std::string why;
+  s.t = t;
+  if (interpolate(system, s, beforeEnd, why)) {
+    restoreOrthogonality(s.q);
+    result.reachedTime = t;
+    return true;
+  }
+  ahead_ = {};
+  result.ok = false;
+  result.reachedTime = t;
+  result.message = "the continuous extension of the last substep failed at t = " + numberText(t) + ": " + why;
+  return false;
+}
+
+bool TimeStepper::fits(const IntegratorState& like) const {
+  if (ahead_.by == 0.0) return true;
+  const IntegratorState& e = ahead_.end;
+  return ahead_.by > 0.0 && std::isfinite(ahead_.by) && e.q.scalars.size() == like.q.scalars.size() &&
+         e.q.rotations.size() == like.q.rotations.size() && e.v.size() == like.v.size() &&
+         e.vdot.size() == like.v.size() && e.a.size() == like.v.size() && e.lambda.size() == like.lambda.size();
 }
 
 }  // namespace mfbd

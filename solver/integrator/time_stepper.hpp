@@ -56,21 +56,33 @@ class TimeStepper {
   virtual bool initialize(Dynamics& system, IntegratorState& state, std::string& message) = 0;
 
   // The inputs jumped at state.t (the state solves the equations of the old
-  // ones): adjust the integrator's history to the new ones. Nothing by default.
-  virtual bool restartAfterInputJump(Dynamics&, IntegratorState&, std::string&) { return true; }
+  // ones): forget a substep taken past state.t with the old ones, and adjust
+  // the integrator's history to the new ones (restartAfterInputJump).
+  bool inputsJumped(Dynamics& system, IntegratorState& state, std::string& message) {
+    ahead_ = {};
+    return restartAfterInputJump(system, state, message);
+  }
   // Substeps over `duration` from state.t, at most options().maxSubsteps
   // of them (tried ones, rejected included): the substep sizes depend on
   // the duration alone, not on state.t. On failure `state` is left at an
   // intermediate time: the caller restores the step start.
-  AdvanceResult advance(Dynamics& system, IntegratorState& state, double duration);
+  // `inputsHeld`: the inputs keep their present values past the end (none
+  // moves), so a stepper with a continuous extension may take its last
+  // substep past the end, answer at the end from the extension, and go on
+  // from that substep's end in the next advance (a substep kept so is
+  // forgotten by an advance whose inputs are not held, and by inputsJumped).
+  AdvanceResult advance(Dynamics& system, IntegratorState& state, double duration, bool inputsHeld = false);
 
   const SolverOptions& options() const { return options_; }
 
   // What influences the next substeps beyond IntegratorState: the kept
   // Newton matrix (recomputed on restore from what it was made of) and the
   // policy that decides when to refresh it.
-  virtual void saveState(StateWriter& ar) { ar(iteration_); }
+  virtual void saveState(StateWriter& ar) { ar(iteration_, ahead_.by, ahead_.end); }
   virtual void loadState(StateReader& ar);
+  // Whether what loadState read has the shapes of `like` (the caller's
+  // checked state): a substep kept past the state's time must.
+  virtual bool fits(const IntegratorState& like) const;
 
   // The velocity jump that restores violated velocity constraints
   // Phi_q v + Phi_t = 0 (`violation` is their value): the impulse a drive
@@ -84,8 +96,21 @@ class TimeStepper {
   static bool consistentAccelerations(Dynamics& system, IntegratorState& state, std::string& message);
 
  protected:
+  // The inputs jumped at state.t: nothing by default.
+  virtual bool restartAfterInputJump(Dynamics&, IntegratorState&, std::string&) { return true; }
   // One substep of size h from s.t; false (with a reason) leaves s unchanged.
   virtual bool substep(Dynamics& system, IntegratorState& s, double h, std::string& why) = 0;
+  // A continuous extension (dense output) of an accepted substep: a stepper
+  // with one keeps the substep just taken from `start` with size h
+  // (keepExtension), and answers from it at `beforeEnd` before that
+  // substep's end (interpolate: s's t is set, q, v, vdot, lambda and a
+  // filled, consistent with the constraints).
+  virtual bool continuousExtension() const { return false; }
+  virtual void keepExtension(const IntegratorState& /*start*/, double /*h*/) {}
+  virtual bool interpolate(Dynamics&, IntegratorState&, double /*beforeEnd*/, std::string& why) {
+    why = "no continuous extension";
+    return false;
+  }
   virtual void beginAdvance(const Dynamics& /*system*/) {}
   // Whether substeps are sized by their error estimate (substep then sets
   // errorRatio_, the estimate over the tolerance, and rejects a substep
@@ -145,6 +170,16 @@ class TimeStepper {
 
   Triplets iterationTriplets_, jacobianTriplets_;
   SparseAssembly iteration_;
+  // The last substep of an advance taken past its end: its end state,
+  // `by` seconds past the state's time (0: none).
+  struct Ahead {
+    double by = 0.0;
+    IntegratorState end;
+  } ahead_;
+  bool answerAhead(Dynamics& system, IntegratorState& s, double t, double beforeEnd, AdvanceResult& result);
+  double resumeAhead(IntegratorState& s) const;
+  double afterRejection(IntegratorState& s, double step, const std::string& why, AdvanceResult& result,
+                        std::string& rejected) const;
 };
 
 }  // namespace mfbd

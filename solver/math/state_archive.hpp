@@ -96,10 +96,13 @@ class StateReader {
     } else if constexpr (std::is_arithmetic_v<T>) {
       raw(&x, sizeof x);
     } else if constexpr (std::is_base_of_v<Eigen::PlainObjectBase<T>, T>) {
-      const long long rows = count(), cols = count();
+      // A dimension alone may exceed the bytes left (an empty column vector
+      // is 0 x 1, last in a state): its elements' bytes may not.
+      const long long rows = dimension(), cols = dimension();
+      const long long elements = remaining() / static_cast<long long>(sizeof(typename T::Scalar));
       if ((T::RowsAtCompileTime != Eigen::Dynamic && rows != T::RowsAtCompileTime) ||
           (T::ColsAtCompileTime != Eigen::Dynamic && cols != T::ColsAtCompileTime) ||
-          (cols > 0 && rows > remaining() / cols))
+          (cols > 0 && rows > elements / cols) || (rows > 0 && cols > elements / rows))
         throw StateError("a matrix has the wrong size");
       x.resize(rows, cols);
       raw(x.data(), sizeof(typename T::Scalar) * std::size_t(x.size()));
@@ -145,6 +148,12 @@ class StateReader {
     long long n;
     raw(&n, sizeof n);
     if (n < 0 || n > remaining()) throw StateError("a size exceeds the state's length");
+    return n;
+  }
+  long long dimension() {
+    long long n;
+    raw(&n, sizeof n);
+    if (n < 0) throw StateError("a matrix has a negative dimension");
     return n;
   }
   long long remaining() const { return static_cast<long long>(end_ - p_); }
