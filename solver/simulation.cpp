@@ -210,9 +210,14 @@ AdvanceResult Simulation::doStep(double t, double H) {
     stepper_->inputsJumped(system_, state_, message);
   }
   // Held inputs let an explicit stepper step past t + H (and answer there
-  // from its dense output); one that moves would be extrapolated.
-  const bool inputsHeld = scene_.analysis == Analysis::Dynamic && !system_.jointSignals().moving &&
-                          !system_.forceSignals().moving && !system_.flexibleSignals().moving;
+  // from its dense output); one that moves would be extrapolated. Not in a
+  // step whose inputs just jumped either: a master that sets new inputs at
+  // every point (a controller) would restart from an answer each time, the
+  // dense output's error (of the order of the substep's estimate) added at
+  // every point, where a landing substep's is an order smaller.
+  const bool inputsHeld = scene_.analysis == Analysis::Dynamic && !inputsChangedSinceStep_ &&
+                          !system_.jointSignals().moving && !system_.forceSignals().moving &&
+                          !system_.flexibleSignals().moving;
   AdvanceResult result = stepper_->advance(system_, state_, H, inputsHeld);
   if (!result.ok) {
     // Where the substeps gave up, say which constraints were redundant:
