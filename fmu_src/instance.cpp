@@ -140,9 +140,15 @@ fmi2Status Instance::setupExperiment(bool toleranceDefined, double tolerance, do
 std::unique_ptr<Simulation> Instance::makeSimulation(const std::vector<double>& values, double tolerance,
                                                      double horizon) const {
   std::map<std::string, double> user;
+  bool defaults = true;
   for (std::size_t i = 0; i < table_.size(); ++i)
-    if (table_[i].quantity.kind == QuantityKind::UserParameter) user[table_[i].name] = values[i];
-  Scene scene = parseScene(sceneText_, user);
+    if (table_[i].quantity.kind == QuantityKind::UserParameter) {
+      user[table_[i].name] = values[i];
+      defaults = defaults && values[i] == table_[i].start;
+    }
+  // The scene parsed at instantiation serves while every user parameter
+  // keeps its start value (a parse is most of a small scene's set-up).
+  Scene scene = defaults ? scene_ : parseScene(sceneText_, user);
   for (std::size_t i = 0; i < table_.size(); ++i)
     if (table_[i].causality == Causality::Parameter) setSceneParameter(scene, table_[i].quantity, values[i]);
   return std::make_unique<Simulation>(scene, tolerance, horizon);
