@@ -197,18 +197,19 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
     // The rest in equal substeps of at most h (within round-off): no short
     // last one, and every substep of a run at constant h the same size, so
     // the Newton matrix of one serves the next (GeneralizedAlpha keeps it
-    // only for the same h). The last one takes exactly what is left, or,
-    // past the end, h.
+    // only for the same h). The last one takes exactly what is left. Free
+    // to pass the end, substeps of h: the communication points do not
+    // shape them at all.
     const double remaining = duration - elapsed;
-    const bool beyond = past && h > remaining * (1.0 + 1e-9);
-    const double count = beyond ? 1.0 : std::max(1.0, std::ceil(remaining / h * (1.0 - 1e-9)));
+    const double count = std::max(1.0, std::ceil(remaining / h * (1.0 - 1e-9)));
     if (!(tried + count <= options_.maxSubsteps)) {
       return fail(rejected + (rejected.empty() ? "the step of " : "; the step of ") + numberText(duration) +
                   " s would need " + numberText(tried + count) + " substeps of at most " + numberText(h) +
                   " s, more than solver.max_substeps = " + numberText(options_.maxSubsteps));
     }
     const bool last = count == 1.0;
-    const double step = beyond ? h : last ? remaining : remaining / count;
+    const bool beyond = past && last && h > remaining * (1.0 + 1e-9);
+    const double step = beyond || (past && !last) ? h : last ? remaining : remaining / count;
     if (beyond) from = s;
     ++tried;
     std::string why;

@@ -143,6 +143,18 @@ def test_substeps_follow_the_motion_past_communication_points():
     assert substeps < 160, substeps
 
 
+def test_the_communication_grid_does_not_shape_the_substeps():
+    # With the inputs held the substeps run free of the communication
+    # points: sampled every 0.1 s or every 0.025 s, R1 takes the same
+    # substeps and answers alike where both sample (only the time
+    # arithmetic of the answers differs, at round-off).
+    outputs = ["bob.position.x", "bob.position.y"]
+    coarse, _, coarse_substeps, _ = sampled(FMUS / "pendulum.fmu", 3.0, 0.1, outputs, 1e-6, {"solver.h_max": 0.5})
+    fine, _, fine_substeps, _ = sampled(FMUS / "pendulum.fmu", 3.0, 0.025, outputs, 1e-6, {"solver.h_max": 0.5})
+    assert coarse_substeps == fine_substeps
+    assert np.abs(coarse - fine[3::4]).max() < 1e-13
+
+
 def pendulum_with_torque(times, torque, at):
     """R1's bob (1 kg, massless 1 m link, angle from horizontal) with a
     hinge torque from time `at`: theta'' = -g cos(theta) + tau."""
