@@ -344,8 +344,8 @@ bool DormandPrince::interpolate(Dynamics& system, IntegratorState& s, double bef
 
 bool DormandPrince::fits(const IntegratorState& like) const {
   if (!TimeStepper::fits(like)) return false;
+  if (!keepsSubstepAhead()) return true;  // the extension is read only with a kept substep
   const Extension& x = extension_;
-  if (x.h == 0.0 && x.q0.scalars.size() == 0 && x.q0.rotations.empty() && x.v0.size() == 0) return true;
   const Eigen::Index n = like.v.size();
   const auto sized = [n](const std::array<VectorXd, 4>& y) {
     for (const VectorXd& part : y)

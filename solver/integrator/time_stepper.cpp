@@ -172,7 +172,7 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
   AdvanceResult result;
   const bool past = inputsHeld && continuousExtension();
   if (!past) ahead_ = {};
-  if (ahead_.by > 0.0 && duration <= ahead_.by) {
+  if (keepsSubstepAhead() && duration <= ahead_.by) {
     if (answerAhead(system, s, s.t + duration, ahead_.by - duration, result)) ahead_.by -= duration;
     return result;
   }
@@ -181,7 +181,7 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
   // small number, exact however large s.t is (at t = 1e10 a difference of
   // absolute times has a resolution of 2e-6 s).
   const double start = s.t;
-  double elapsed = ahead_.by > 0.0 ? resumeAhead(s) : 0.0;
+  double elapsed = keepsSubstepAhead() ? resumeAhead(s) : 0.0;
   double h = std::min(s.h > 0.0 ? s.h : options_.hMax, options_.hMax);
   double tried = 0.0;  // substeps tried, rejected ones included
   int successes = 0;

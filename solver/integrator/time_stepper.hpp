@@ -67,10 +67,11 @@ class TimeStepper {
   // the duration alone, not on state.t. On failure `state` is left at an
   // intermediate time: the caller restores the step start.
   // `inputsHeld`: the inputs keep their present values past the end (none
-  // moves), so a stepper with a continuous extension may take its last
-  // substep past the end, answer at the end from the extension, and go on
-  // from that substep's end in the next advance (a substep kept so is
-  // forgotten by an advance whose inputs are not held, and by inputsJumped).
+  // moves), so a stepper with a continuous extension takes substeps of its
+  // own size, the last past the end, answers at the end from the extension,
+  // and goes on from that substep's end in the next advance (a substep kept
+  // so is forgotten by an advance whose inputs are not held, and by
+  // inputsJumped).
   AdvanceResult advance(Dynamics& system, IntegratorState& state, double duration, bool inputsHeld = false);
 
   const SolverOptions& options() const { return options_; }
@@ -106,6 +107,7 @@ class TimeStepper {
   // substep's end (interpolate: s's t is set, q, v, vdot, lambda and a
   // filled, consistent with the constraints).
   virtual bool continuousExtension() const { return false; }
+  bool keepsSubstepAhead() const { return ahead_.by > 0.0; }
   virtual void keepExtension(const IntegratorState& /*start*/, double /*h*/) {}
   virtual bool interpolate(Dynamics&, IntegratorState&, double /*beforeEnd*/, std::string& why) {
     why = "no continuous extension";
