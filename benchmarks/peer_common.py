@@ -92,13 +92,19 @@ class FmuRun:
     def at_end(self, names, stop, communication):
         """Initializes, steps to `stop` by `communication` and reads `names`
         there only (none: nothing), then frees the instance: (the values, the
-        wall time of initialization and steps, statistics)."""
+        wall time of initialization and steps, statistics). The steps run in
+        C as in sample(): a Python loop's ~1.5 us per step was a third of the
+        pendulum's 100 steps at a loose tolerance."""
+        reached = ctypes.c_double(0.0)
+        loop = fmu_loop()
         try:
             start = time.perf_counter()
             self.initialize()
-            for _ in range(int(round(stop / communication))):
-                self.step(communication)
+            failed = loop(self._do_step_address, self._get_real_address, self._component, communication,
+                          int(round(stop / communication)), None, 0, None, ctypes.byref(reached))
             wall = time.perf_counter() - start
+            assert failed == 0, f"fmi2DoStep failed at t = {reached.value}:\n{self.slave.messages()}"
+            self.t = reached.value
             values = self.get(*names) if names else None
             statistics = self.statistics()
         finally:
