@@ -16,6 +16,7 @@ import copy
 import csv
 import ctypes
 import dataclasses
+import functools
 import pathlib
 import re
 import shutil
@@ -177,6 +178,16 @@ def our_run(fmu, h, output, stop, tolerance=None, parameters=None):
     if tolerance:
         return FmuRun(fmu, {"solver.h_max": output, **(parameters or {})}, tolerance=tolerance, stop_time=stop)
     return FmuRun(fmu, {"solver.h_max": h, **(parameters or {})})
+
+
+def tolerance_series(meshes, run, tolerances):
+    """Ours driven by fmi2SetupExperiment's tolerance on every mesh, as one
+    series (codes() entries of one model, each mesh's with the tolerances as
+    its own settings; run(n, tolerance), its result naming the mesh in
+    `elements`). The user of a flexible model picks the mesh for the
+    spatial error and the tolerance for the time error, so this front spans
+    both, as Exudyn's generalized-alpha front spans mesh and step."""
+    return [(OURS, "by tolerance (generalized-alpha)", functools.partial(run, n), tolerances) for n in meshes]
 
 
 def fmu_loop():
@@ -622,10 +633,11 @@ def extrapolated_references(label, runs, meshes, key, column):
 
 def mesh_and_step(row):
     """Annotation of a run over elements and substep: "n / h"; of a run
-    driven by a tolerance: "tol" and its value; of a run at a substep h
-    only: h."""
+    driven by a tolerance: "n / tol" and its value (n where the row has
+    it); of a run at a substep h only: h."""
     if row.get("tolerance") not in (None, ""):
-        return f"tol {float(row['tolerance']):.0e}"
+        mesh = f"{row['elements']}/" if row.get("elements") not in (None, "") else ""
+        return f"{mesh}tol {float(row['tolerance']):.0e}"
     if row.get("h_s") in (None, ""):
         return _short(row["h_or_elements"])
     return f"{_short(row['h_or_elements'])}/{float(row['h_s']):.0e}"

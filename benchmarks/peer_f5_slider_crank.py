@@ -38,8 +38,9 @@ Ours by tolerance: our FMU driven by fmi2SetupExperiment's relative
 tolerance 1e-3 ... 1e-8 over the 0.4 s (stopTime passed), h_max = the
 output interval 1e-3 s, the FMU's choice of integrator (generalized-alpha,
 the local error held per substep for flexible bodies), Newton tolerance
-following the error tolerance. One mesh, n = 32 (the finest of the pairs;
-its runs at tolerance 1e-7 and 1e-8 are 6.8e-8 and 3.9e-7 m from the
+following the error tolerance. One series over every mesh of the pairs (a
+user picks the mesh for the spatial error, the tolerance for the time
+error; n = 32's runs at tolerance 1e-7 and 1e-8 are 6.8e-8 and 3.9e-7 m from the
 n = 64 reference, whose own time error, about a quarter of n = 32's
 1.4e-6 m at twice its step, is about 4e-7 m: the spatial error is below
 that, far below the levels compared, 1e-3 ... 1e-5 m, and the measure
@@ -55,7 +56,7 @@ f5_slider_crank_precision.png (error against wall time; the curves).
 import numpy as np
 
 from peer_common import EXUDYN, OURS, Panel, PeerStudy, our_run, draw_curves, exudyn_beam_line_2d, exudyn_settings, \
-    exudyn_solve, exudyn_spin_up_drive, figure, load_scene, save_figure, sweep
+    exudyn_solve, exudyn_spin_up_drive, figure, load_scene, save_figure, sweep, tolerance_series
 
 CRANK, ROD, OMEGA, T_UP = 0.15, 0.30, 150.0, 0.15
 E, NU, RHO, D = 2e11, 0.3, 7870.0, 0.006
@@ -71,7 +72,6 @@ RHO_INF = 0.8
 # Ours driven by an error tolerance, on one mesh whose spatial error is
 # well below what the series reaches (see the docstring).
 TOLERANCES = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8]
-TOLERANCE_MESH = 32
 
 
 def midspan_deflection(p0, pm, pn):
@@ -146,14 +146,13 @@ class Study(PeerStudy):
         return [(OURS, "crank on driven revolute, massless slider, 3D corotational rod",
                  lambda n, h: ours(self.fmus[n], n, h)),
                 (EXUDYN, "RigidBody2D crank, coordinate drive, BeamGeometricallyExact2D rod", exudyn_slider_crank_2d),
-                (OURS, f"by tolerance (generalized-alpha), n = {TOLERANCE_MESH}",
-                 lambda tol: ours(self.fmus[TOLERANCE_MESH], TOLERANCE_MESH, None, tol), TOLERANCES)]
+                *tolerance_series([n for n, _ in PAIRS], lambda n, tol: ours(self.fmus[n], n, None, tol), TOLERANCES)]
 
     def run(self):
         """Each code's converged curve first (REFERENCE), then the sweep
         against it; the runs' curves are kept for the figure."""
         self.fmus = {n: self.pack(slider_crank_scene(n), f"crank{n}")
-                     for n in {n for n, _ in self.settings + [REFERENCE]} | {TOLERANCE_MESH}}
+                     for n in {n for n, _ in self.settings + [REFERENCE]}}
         self.reference, reference_rows = {}, []
         for code, _, run, *tolerances in self.codes():
             if tolerances:
