@@ -26,6 +26,23 @@ struct JointKinematics {
   Matrix6X motionSubspace;  // columns: [linear; angular] velocity of the child's centre of mass per joint rate
 };
 
+// A rigid body's (or subtree's) spatial inertia about the world origin O,
+// world frame, in its ten numbers: mass m, first moment h = m c (c the
+// centre of mass), rotational inertia J_O = J_c - m [c]x[c]x. The momentum
+// of the twist [v_O; omega] is p = m v_O + omega x h, L_O = h x v_O + J_O
+// omega (Featherstone 2008, ch. 2); inertias about one point simply add.
+struct InertiaAtOrigin {
+  double mass = 0.0;
+  Vec3 firstMoment = Vec3::Zero();
+  Mat3 rotational = Mat3::Zero();
+  InertiaAtOrigin& operator+=(const InertiaAtOrigin& other) {
+    mass += other.mass;
+    firstMoment += other.firstMoment;
+    rotational += other.rotational;
+    return *this;
+  }
+};
+
 struct Data {
   explicit Data(const Model& model);
 
@@ -40,9 +57,9 @@ struct Data {
   // Velocity transformation B: rows [6 i, 6 i + 6) give body i's
   // [velocity; angular velocity] (world, centre of mass) per joint rate.
   Eigen::MatrixXd velocityTransformation;
-  // Each subtree's spatial inertia about the world origin (workspace of
+  // Each subtree's inertia about the world origin (workspace of
   // jointSpaceMassMatrix).
-  std::vector<Eigen::Matrix<double, 6, 6>> compositeInertia;
+  std::vector<InertiaAtOrigin> compositeInertia;
 };
 
 }  // namespace mfbd

@@ -212,26 +212,36 @@ void computeVelocityTransformation(const Model& model, Data& data) {
 
 namespace {
 
-using SpatialInertia = Eigen::Matrix<double, 6, 6>;
-
 // A joint's motion subspace as twists [v_O; omega] of the point of its child
 // body at the world origin O (v_O = v_c + c x omega): one reference point
 // for every body, so that inertias of a subtree simply add.
 Matrix6X motionAtOrigin(const Data& data, int body, int joint) {
   Matrix6X S = data.joint[joint].motionSubspace;
-  S.topRows<3>() += skew(data.body[body].position) * S.bottomRows<3>();
+  const Vec3& c = data.body[body].position;
+  for (int k = 0; k < S.cols(); ++k) S.block<3, 1>(0, k) += c.cross(S.block<3, 1>(3, k));
   return S;
 }
 
-// Spatial inertia about O, world frame: [p; L_O] = I [v_O; omega].
-SpatialInertia spatialInertiaAtOrigin(const Body& b, const BodyKinematics& k) {
-  const Mat3 c = skew(k.position);
-  SpatialInertia I;
-  I.topLeftCorner<3, 3>() = b.mass * Mat3::Identity();
-  I.topRightCorner<3, 3>() = -b.mass * c;
-  I.bottomLeftCorner<3, 3>() = b.mass * c;
-  I.bottomRightCorner<3, 3>() = k.orientation * b.inertia * k.orientation.transpose() - b.mass * c * c;
+InertiaAtOrigin inertiaAtOrigin(const Body& b, const BodyKinematics& k) {
+  const Vec3& c = k.position;
+  InertiaAtOrigin I;
+  I.mass = b.mass;
+  I.firstMoment = b.mass * c;
+  // J_c - m [c]x[c]x = J_c + m (|c|^2 1 - c c^T)
+  I.rotational = k.orientation * b.inertia * k.orientation.transpose() +
+                 b.mass * (c.squaredNorm() * Mat3::Identity() - c * c.transpose());
   return I;
+}
+
+// The momenta [p; L_O] of the twists in S's columns.
+Matrix6X momenta(const InertiaAtOrigin& I, const Matrix6X& S) {
+  Matrix6X F(6, S.cols());
+  for (int k = 0; k < S.cols(); ++k) {
+    const Vec3 v = S.block<3, 1>(0, k), w = S.block<3, 1>(3, k);
+    F.block<3, 1>(0, k) = I.mass * v + w.cross(I.firstMoment);
+    F.block<3, 1>(3, k) = I.firstMoment.cross(v) + I.rotational * w;
+  }
+  return F;
 }
 
 }  // namespace
@@ -242,8 +252,8 @@ SpatialInertia spatialInertiaAtOrigin(const Body& b, const BodyKinematics& k) {
 // with a dense B costs O(n^2 d).
 void jointSpaceMassMatrix(const Model& model, Data& data, Eigen::MatrixXd& M) {
   const int nb = int(model.bodies.size());
-  std::vector<SpatialInertia>& composite = data.compositeInertia;
-  for (int i = 0; i < nb; ++i) composite[i] = spatialInertiaAtOrigin(model.bodies[i], data.body[i]);
+  std::vector<InertiaAtOrigin>& composite = data.compositeInertia;
+  for (int i = 0; i < nb; ++i) composite[i] = inertiaAtOrigin(model.bodies[i], data.body[i]);
   for (int i = nb - 1; i >= 0; --i)
     if (model.bodies[i].parent != kGroundIndex) composite[model.bodies[i].parent] += composite[i];
   M.setZero(model.rigidVelocityCount, model.rigidVelocityCount);
@@ -251,12 +261,14 @@ void jointSpaceMassMatrix(const Model& model, Data& data, Eigen::MatrixXd& M) {
     const Joint& ji = model.joints[model.bodies[i].inboardJoint];
     if (ji.dofs == 0) continue;
     const Matrix6X Si = motionAtOrigin(data, i, model.bodies[i].inboardJoint);
-    const Matrix6X F = composite[i] * Si;  // wrench per joint acceleration of the subtree
+    const Matrix6X F = momenta(composite[i], Si);  // wrench per joint acceleration of the subtree
     M.block(ji.velocityOffset, ji.velocityOffset, ji.dofs, ji.dofs) = Si.transpose() * F;
     for (int k = model.bodies[i].parent; k != kGroundIndex; k = model.bodies[k].parent) {
       const Joint& jk = model.joints[model.bodies[k].inboardJoint];
       if (jk.dofs == 0) continue;
-      const Eigen::MatrixXd Mki = motionAtOrigin(data, k, model.bodies[k].inboardJoint).transpose() * F;
+      // At most 6 x 6: on the stack.
+      const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, 6, 6> Mki =
+          motionAtOrigin(data, k, model.bodies[k].inboardJoint).transpose() * F;
       M.block(jk.velocityOffset, ji.velocityOffset, jk.dofs, ji.dofs) = Mki;
       M.block(ji.velocityOffset, jk.velocityOffset, ji.dofs, jk.dofs) = Mki.transpose();
     }
