@@ -36,6 +36,8 @@ EXUDYN = "Exudyn"
 # Both codes stop Newton at the same increment tolerance unless a study says
 # otherwise (ours: the error estimated after the last correction).
 NEWTON_TOLERANCE = 1e-12
+# Relative tolerances of the series driven by fmi2SetupExperiment (issue 18's range).
+TOLERANCES = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8]
 
 
 def best_of(run, repeats, min_total=0.5, max_repeats=25):
@@ -53,9 +55,9 @@ def best_of(run, repeats, min_total=0.5, max_repeats=25):
 class FmuRun:
     """One FMU instance, for timing a run and reading its Newton statistics.
 
-    sample() runs the timed loop of fmi2DoStep and fmi2GetReal in C
-    (fmu_loop.c) over the FMU's own entry points, as a C importer does;
-    step() and get() call them through bare ctypes prototypes (fmpy's
+    sample() and at_end() run the timed loop of fmi2DoStep and fmi2GetReal
+    in C (fmu_loop.c) over the FMU's own entry points, as a C importer
+    does; get() reads through a bare ctypes prototype (fmpy's
     checked wrappers would add about 2 us of Python per call, 5 ms of
     10 ms in F3 at n = 2: 1,000 doSteps and reads). Solver statistics
     come from the `logStatistics` line that fmi2Terminate writes (no log
@@ -93,29 +95,30 @@ class FmuRun:
     def at_end(self, names, stop, communication):
         """Initializes, steps to `stop` by `communication` and reads `names`
         there only (none: nothing), then frees the instance: (the values, the
-        wall time of initialization and steps, statistics). The steps run in
-        C as in sample(): a Python loop's ~1.5 us per step was a third of the
-        pendulum's 100 steps at a loose tolerance."""
-        reached = ctypes.c_double(0.0)
-        loop = fmu_loop()
+        wall time of initialization and steps, statistics)."""
         try:
-            start = time.perf_counter()
-            self.initialize()
-            failed = loop(self._do_step_address, self._get_real_address, self._component, communication,
-                          int(round(stop / communication)), None, 0, None, ctypes.byref(reached))
-            wall = time.perf_counter() - start
-            assert failed == 0, f"fmi2DoStep failed at t = {reached.value}:\n{self.slave.messages()}"
-            self.t = reached.value
+            wall = self._timed_loop(communication, int(round(stop / communication)), None, 0, None)
             values = self.get(*names) if names else None
             statistics = self.statistics()
         finally:
             self.free()
         return values, wall, statistics
 
-    def step(self, h):
-        status = self._do_step(self._component, self.t, h, 1)
-        assert status == 0, f"fmi2DoStep status {status} at t = {self.t}:\n{self.slave.messages()}"
-        self.t += h
+    def _timed_loop(self, output, steps, references, count, rows):
+        """Initialization and fmu_loop.c's steps (reading `count` references
+        into `rows` at every point), timed: the wall time. A Python loop
+        would add about 1.5 us per communication step, a third of a small
+        model's."""
+        reached = ctypes.c_double(0.0)
+        loop = fmu_loop()
+        start = time.perf_counter()
+        self.initialize()
+        failed = loop(self._do_step_address, self._get_real_address, self._component, output, steps, references,
+                      count, rows, ctypes.byref(reached))
+        wall = time.perf_counter() - start
+        assert failed == 0, f"fmi2DoStep or fmi2GetReal failed at t = {reached.value}:\n{self.slave.messages()}"
+        self.t = reached.value
+        return wall
 
     def get(self, *names):
         if names not in self._reads:
@@ -145,25 +148,14 @@ class FmuRun:
         """Initializes, steps to `stop` by `output`, reading `names` at every
         communication point (t = 0 included), and frees the instance.
         Returns (samples, one row per point, the wall time of the run,
-        statistics). The timed loop of doSteps and reads runs in C
-        (benchmarks/fmu_loop.c), as a co-simulation master's does, each read
-        straight into its row of the array: the time is the FMU's, not a
-        Python loop's (about 1.5 us per communication step, a third of a
-        small model's)."""
+        statistics). Each read goes straight into its row of the array
+        (_timed_loop)."""
         steps = int(round(stop / output))
         count = len(names)
         samples = np.zeros((steps + 1, count))
         references = (ctypes.c_uint * count)(*(self.slave.vr[n] for n in names))
-        reached = ctypes.c_double(0.0)
-        loop = fmu_loop()
         try:
-            start = time.perf_counter()
-            self.initialize()
-            failed = loop(self._do_step_address, self._get_real_address, self._component, output, steps, references,
-                          count, samples.ctypes.data, ctypes.byref(reached))
-            wall = time.perf_counter() - start
-            assert failed == 0, f"fmi2DoStep or fmi2GetReal failed at t = {reached.value}:\n{self.slave.messages()}"
-            self.t = reached.value
+            wall = self._timed_loop(output, steps, references, count, samples.ctypes.data)
             statistics = self.statistics()
         finally:
             self.free()
@@ -180,14 +172,19 @@ def our_run(fmu, h, output, stop, tolerance=None, parameters=None):
     return FmuRun(fmu, {"solver.h_max": h, **(parameters or {})})
 
 
-def tolerance_series(meshes, run, tolerances):
-    """Ours driven by fmi2SetupExperiment's tolerance on every mesh, as one
-    series (codes() entries of one model, each mesh's with the tolerances as
-    its own settings; run(n, tolerance), its result naming the mesh in
-    `elements`). The user of a flexible model picks the mesh for the
-    spatial error and the tolerance for the time error, so this front spans
-    both, as Exudyn's generalized-alpha front spans mesh and step."""
-    return [(OURS, "by tolerance (generalized-alpha)", functools.partial(run, n), tolerances) for n in meshes]
+def tolerance_series(pairs, run, tolerances=TOLERANCES):
+    """Ours driven by fmi2SetupExperiment's tolerance on every mesh of the
+    (n, h) pairs, as one series (codes() entries of one model, each mesh's
+    with the tolerances as its own settings; run(n, tolerance), each result
+    naming its mesh in `elements`). The user of a flexible model picks the
+    mesh for the spatial error and the tolerance for the time error, so
+    this front spans both, as Exudyn's generalized-alpha front spans mesh
+    and step."""
+    def on_mesh(n, tolerance):
+        return dict(run(n, tolerance), elements=n)
+
+    return [(OURS, "by tolerance (generalized-alpha)", functools.partial(on_mesh, n), tolerances)
+            for n in dict.fromkeys(n for n, _ in pairs)]
 
 
 def fmu_loop():
