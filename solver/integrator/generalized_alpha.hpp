@@ -89,7 +89,7 @@ class GeneralizedAlpha : public TimeStepper {
     NewtonMemory& m = refresh_.memory;
     ar(m.factoredStep, m.origin.t, m.origin.q, m.origin.v, m.origin.vdot, m.origin.lambda);
     ar(m.correctionNoise, m.elasticCoordinates, m.freshStarts, m.lastIterations, m.substepsSinceFactorization);
-    ar(m.firstRate, m.lastRate);
+    ar(m.firstRate, m.lastRate, m.newtonErrorLeft, m.discretisationError);
     solver_.saveOrLoad(ar);
   }
 };

@@ -32,6 +32,10 @@ struct NewtonMemory {
   double substepsSinceFactorization = 0.0;  // accepted since the current factorization
   double firstRate = 0.0;  // contraction at the first check of the last substep with a kept matrix
   double lastRate = 1.0;   // contraction at the last check of the previous substep (1: unknown)
+  // Since the last communication point (beginAdvance): the error Newton
+  // left in the substeps' positions, and their local discretisation error.
+  double newtonErrorLeft = 0.0;
+  double discretisationError = 0.0;
 };
 
 // One Newton correction as the convergence test and the policy see it.
@@ -106,6 +110,9 @@ class MatrixRefreshPolicy {
   // After every correction, before the convergence verdict.
   void observe(const NewtonIterate& it, const Assessment& a);
   void accepted(const NewtonIterate& it, const Assessment& a);
+  // The converged substep's local discretisation error (m, rad), against
+  // which beginAdvance judges the error Newton left.
+  void addDiscretisationError(double e) { memory.discretisationError += e; }
   // Not converged: refresh the matrix if its contraction is too slow; true
   // when the iteration diverges with a matrix of its own.
   bool diverging(const NewtonIterate& it, const Assessment& a, int maxIterations);
@@ -113,6 +120,7 @@ class MatrixRefreshPolicy {
 
   static constexpr double kRefreshHorizon = 4.0;
   static constexpr double kStaleRate = 1e-3;
+  static constexpr double kNewtonErrorFraction = 1e-2;
   static constexpr int kFreshStarts = 4;
 
  private:
