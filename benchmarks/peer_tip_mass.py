@@ -60,8 +60,6 @@ FORCE = 0.01 * EI / L**2
 PAIRS = [(2, 1e-2), (4, 1e-2), (8, 5e-3), (16, 2.5e-3), (32, 1.25e-3)]
 GRID = refinement_grid(PAIRS)  # PAIRS plus finer steps on the two coarsest meshes
 RHO_INF = 0.9
-# Ours driven by an error tolerance, on one mesh whose spatial error is
-# well below what the series reaches (see the docstring).
 
 
 def tip_mass_frequencies(mu=TIP_MASS / (RHO_A * L), count=4):
