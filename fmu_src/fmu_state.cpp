@@ -27,8 +27,10 @@ constexpr char kMagic[8] = {'M', 'F', 'B', 'D', 'S', 'T', 'A', 'T'};
 // 2: the Dormand-Prince stepper saves its redundant constraint rows; 3: the
 // steppers save a substep kept past the state's time (dense output); 4:
 // generalized-alpha's Newton memory holds the error Newton left and the
-// local discretisation error since the last communication point.
-constexpr std::uint32_t kFormatVersion = 4;
+// local discretisation error since the last communication point; 5: the
+// system saves the redundant constraint rows it leaves out (for every
+// stepper, in place of the Dormand-Prince stepper's own).
+constexpr std::uint32_t kFormatVersion = 5;
 constexpr std::size_t kFrameBytes = sizeof kMagic + 4 + 4 + 8 + 4;  // the header and CRC around GUID and payload
 
 // CRC-32 (reflected polynomial 0xEDB88320, initial and final XOR all ones):

@@ -191,7 +191,16 @@ VectorXd System::constraintAccelerationTerm(double t, const Configuration& q, co
     flexibleNodeStates(model_.flexible, q, v, VectorXd::Zero(model_.velocityCount), t, drives_, flexibleSignals_,
                        nodes_);
   twoMarkerAccelerationTerms(gamma);
+  leaveOutRedundantRows(gamma);
   return gamma;
+}
+
+void System::leaveOutRedundantRows(VectorXd& rows, bool violation) {
+  if (violation) redundantViolation_ = 0.0;
+  for (int row : redundantRows_) {
+    if (violation) redundantViolation_ = std::max(redundantViolation_, std::abs(rows[row]));
+    rows[row] = 0.0;
+  }
 }
 
 const TwoMarkerConstraint& System::constraintAtRow(int firstRow) const {

@@ -49,11 +49,10 @@ std::string Simulation::constraintOwners(const std::vector<int>& rows) const {
   return text;
 }
 
-// Redundant constraint rows at (q, v), in joint names: rows that constrain
-// nothing there (`vanishing`: a planar loop in 3-D) and rows that are
-// combinations of others (Bricard; two drives of one motion).
-std::string Simulation::redundantConstraints(const Configuration& q, const VectorXd& v, bool vanishing) {
-  const ConstraintRank rank = constraintRank(constraintJacobian(q, v));
+// Redundant constraint rows, in joint names: rows that constrain nothing
+// (`vanishing`: a planar loop in 3-D) and rows that are combinations of
+// others (Bricard; two drives of one motion).
+std::string Simulation::redundantConstraints(const ConstraintRank& rank, bool vanishing) {
   std::string text;
   if (vanishing && !rank.vanishingRows.empty())
     text += std::to_string(rank.vanishingRows.size()) + " rows constrain nothing here (of " +

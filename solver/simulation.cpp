@@ -130,12 +130,15 @@ bool Simulation::initialize(double t0, std::string& message, std::vector<std::st
     s->anchor.setConstant(t0);
   system_.startDrives(t0);
   carryFlexibleBodies();
+  system_.setRedundantRows({});
   if (!assembleConstraints(message, notes)) return false;
   if (notes && !integratorNote_.empty()) notes->push_back(integratorNote_);
-  if (notes && system_.constraintCount() > 0) {
-    const std::string redundant = redundantConstraints(state_.q, state_.v, true);
-    if (!redundant.empty())
-      notes->push_back("redundant constraints at the start (regularised in the solve): " + redundant);
+  if (system_.constraintCount() > 0) {
+    const ConstraintRank rank = constraintRank(constraintJacobian(state_.q, state_.v));
+    system_.setRedundantRows(rank.redundantRows());
+    const std::string redundant = redundantConstraints(rank, true);
+    if (notes && !redundant.empty())
+      notes->push_back("redundant constraints at the start (left out of the solve): " + redundant);
   }
   if (notes && system_.recursiveNewtonMatrix())
     notes->push_back("Newton matrix in the recursive form: " + std::to_string(system_.model().bodies.size()) +
@@ -223,7 +226,7 @@ AdvanceResult Simulation::doStep(double t, double H) {
     // Where the substeps gave up, say which constraints were redundant:
     // rows that the motion cannot meet together are the usual cause.
     if (system_.constraintCount() > 0) {
-      const std::string redundant = redundantConstraints(state_.q, state_.v, false);
+      const std::string redundant = redundantConstraints(constraintRank(constraintJacobian(state_.q, state_.v)), false);
       if (!redundant.empty()) result.message += "; redundant constraints there: " + redundant;
     }
     std::swap(state_, stepStart_);

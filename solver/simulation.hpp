@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "integrator/constraint_rank.hpp"
 #include "integrator/time_stepper.hpp"
 #include "model/model_numbering.hpp"
 #include "system.hpp"
@@ -135,7 +136,7 @@ class Simulation {
   std::string constraintOwner(int row) const;
   std::string constraintOwners(const std::vector<int>& rows) const;
   Eigen::MatrixXd constraintJacobian(const Configuration& q, const VectorXd& v);
-  std::string redundantConstraints(const Configuration& q, const VectorXd& v, bool vanishing);
+  std::string redundantConstraints(const ConstraintRank& rank, bool vanishing);
   double readFlexible(const Quantity& q);
   void setInput(InputSignals& signals, int i, double value);
   InputSignals* inputSignal(const Quantity& q, int& index);

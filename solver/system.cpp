@@ -70,7 +70,10 @@ bool System::stateFits() const {
   return fits(jointSignals_, model_.jointInputCount) && fits(forceSignals_, model_.forceInputCount) &&
          fits(flexibleSignals_, model_.flexible.inputCount) &&
          drives_.startAngle.size() == model_.flexible.drives.size() &&
-         jointDriveStart_.size() == model_.joints.size();
+         jointDriveStart_.size() == model_.joints.size() &&
+         std::is_sorted(redundantRows_.begin(), redundantRows_.end()) &&
+         std::all_of(redundantRows_.begin(), redundantRows_.end(),
+                     [&](int row) { return row >= 0 && row < model_.constraintCount; });
 }
 
 void System::retract(Configuration& q, const VectorXd& dq) const { mfbd::retract(model_.blocks, q, dq); }
@@ -170,6 +173,7 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
   if (!model_.bodies.empty()) {
     rigidResidual(t, q, v, vdot, lambda, rigid_, phi, &r);
     r.head(model_.rigidVelocityCount) = rigid_;
+    leaveOutRedundantRows(phi, true);
   }
   if (failed) r.setConstant(std::numeric_limits<double>::quiet_NaN());
 }
@@ -199,6 +203,7 @@ VectorXd System::velocityConstraints(double t, const Configuration& q, const Vec
     if (j.driven)
       violation[j.constraintOffset] =
           v[j.velocityOffset] - (j.driveRateInput ? jointSignals_.at(j.inputOffset, t) : j.drive.rate(t));
+  leaveOutRedundantRows(violation);
   return violation;
 }
 
@@ -220,6 +225,13 @@ void System::tangent(double t, const Configuration& q, const VectorXd& v, const 
                     inertia ? cC : 0.0, cK, iteration);
   }
   twoMarkerStiffness(lambda, cK, recursive, iteration);
+  if (!redundantRows_.empty())
+    constraintJacobian.erase(std::remove_if(constraintJacobian.begin(), constraintJacobian.end(),
+                                            [&](const Eigen::Triplet<double>& e) {
+                                              return std::binary_search(redundantRows_.begin(),
+                                                                        redundantRows_.end(), e.row());
+                                            }),
+                             constraintJacobian.end());
 }
 
 // The rigid tree's joint-space tangent differentiates its residual over

@@ -71,6 +71,24 @@ class System : public Dynamics {
   void constraintJacobian(double t, const Configuration& q, const VectorXd& v, Triplets& jacobian);
   // Phi_q v + Phi_t; Phi_t (drives) by central differences in time.
   VectorXd velocityConstraints(double t, const Configuration& q, const VectorXd& v) override;
+  // Constraint rows that are combinations of the others along the motion
+  // (Bricard's sixth joint condition; a planar loop's out-of-plane rows),
+  // found at the start (Simulation::initialize), are left out of what the
+  // integrator solves, as multibody codes leave out redundant constraints:
+  // their rows of phi, gamma and Phi_q v + Phi_t read zero and the Newton
+  // matrix gets no Jacobian row for them, so their multipliers stay zero.
+  // Kept in, a regularised constraint block turns each row's round-off into
+  // a multiplier along the null space of Phi_q^T, and the iterations add it
+  // up without bound (docs/design.md, "Redundant constraints").
+  // constraintJacobian keeps every row (outputs, assembly, rank).
+  void setRedundantRows(std::vector<int> rows) { redundantRows_ = std::move(rows); }
+  const std::vector<int>& redundantRows() const { return redundantRows_; }
+  double redundantViolation() const override { return redundantViolation_; }
+  bool readmitRedundantRows() override {
+    const bool any = !redundantRows_.empty();
+    redundantRows_.clear();
+    return any;
+  }
   double constraintLengthScale() const override { return constraintLengthScale_; }
   double tangentCost() const override;
   bool elasticCoordinates() const override;
@@ -94,6 +112,7 @@ class System : public Dynamics {
   void visitState(Archive& ar) {
     ar(jointSignals_, forceSignals_, flexibleSignals_);
     ar(drives_.startAngle, drives_.stepStart, jointDriveStart_, jointDriveStepStart_, constraintLengthScale_);
+    ar(redundantRows_);
     for (Joint& j : model_.joints) ar(j.damping);
     for (FlexElement& e : model_.flexible.elements) ar(e.damping);
     drives_.samples.clear();  // a cache of time functions, recomputed alike
@@ -167,6 +186,11 @@ class System : public Dynamics {
   VectorXd noAccelerations_, noMultipliers_, noConstraints_;  // unconstrainedAccelerations' workspace
   Eigen::LLT<Eigen::MatrixXd> massFactor_;
   double constraintLengthScale_ = 1.0;  // of the last residual
+  std::vector<int> redundantRows_;     // see setRedundantRows
+  double redundantViolation_ = 0.0;    // of the last residual
+  // Zeroes the redundant rows of a constraint vector (phi: recording their
+  // violation first).
+  void leaveOutRedundantRows(VectorXd& rows, bool violation = false);
   bool recursiveMatrix_ = false;  // Newton matrix in the recursive form (dynamics)
   std::vector<int> blockOfRate_;  // model_.blocks index of each rate
   // Sparsity of the rigid tangent: the joint rates that move each body (its

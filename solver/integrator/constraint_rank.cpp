@@ -1,10 +1,18 @@
 #include "integrator/constraint_rank.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/QR>
 
 namespace mfbd {
+
+std::vector<int> ConstraintRank::redundantRows() const {
+  std::vector<int> rows = vanishingRows;
+  for (const std::vector<int>& set : dependentRows) rows.push_back(set.front());
+  std::sort(rows.begin(), rows.end());
+  return rows;
+}
 
 ConstraintRank constraintRank(const Eigen::MatrixXd& jacobian, double tolerance) {
   ConstraintRank result;

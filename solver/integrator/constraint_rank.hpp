@@ -20,6 +20,9 @@ struct ConstraintRank {
   // Each dependent row, followed by the independent rows of which it is a
   // combination.
   std::vector<std::vector<int>> dependentRows;
+  // The rows the others make redundant: the vanishing ones and the first
+  // of each dependent set, increasing.
+  std::vector<int> redundantRows() const;
 };
 
 // Rank by QR with column pivoting of the row-normalised Phi_q^T: a row is

@@ -58,6 +58,14 @@ class Dynamics {
   // Phi_q v + Phi_t at (t, q, v): the velocity constraints' violation
   // (constraintCount rows; empty when the system cannot say).
   virtual VectorXd velocityConstraints(double /*t*/, const Configuration& /*q*/, const VectorXd& /*v*/) { return {}; }
+  // The largest violation, at the last residual, of the constraint rows left
+  // out of the solve as redundant (System::setRedundantRows: their rows of
+  // the residual read zero). They hold where the others do while they stay
+  // redundant (TimeStepper::redundantRowsHold).
+  virtual double redundantViolation() const { return 0.0; }
+  // Takes the rows left out as redundant back into the solve; false when
+  // none were left out.
+  virtual bool readmitRedundantRows() { return false; }
   // Whether stiff forces read the coordinates (flexible nodes, springs,
   // bushings): then their round-off, a few ulps of the coordinates, makes
   // force noise that the Newton corrections cannot resolve below. A rigid

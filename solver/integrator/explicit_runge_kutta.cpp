@@ -6,7 +6,6 @@
 
 #include <Eigen/QR>
 
-#include "integrator/constraint_rank.hpp"
 #include "math/number_text.hpp"
 
 namespace mfbd {
@@ -28,65 +27,10 @@ const DormandPrinceTableau kDormandPrince = {
 
 bool DormandPrince::initialize(Dynamics& system, IntegratorState& state, std::string& message) {
   if (!consistentAccelerations(system, state, message)) return false;
-  findDependentRows(system, state);
   state.a = state.vdot;
   state.hBefore = 0.0;
   if (state.h <= 0.0) state.h = options_.hMax;
   return true;
-}
-
-// A redundant row (Bricard's sixth joint condition) keeps Phi_q's rank
-// below its row count along the whole motion, and off the constraint
-// manifold by the substep's error the rows turn independent with a singular
-// value of that size: a right-hand side with a part outside Phi_q's range
-// (the redundant row's own error) is then solved by a large move along the
-// mechanism's free motion, through the regularised constraint block, in
-// every stage and projection. The index-3 Newton iteration of
-// generalized-alpha does not see this (it meets the rows themselves); here
-// Bricard at tolerance 1e-6 ended 3.6e-3 m off with each substep's
-// estimate within the tolerance. So the dependent rows, found once at the
-// start, take the combination of the independent rows' right-hand sides
-// that their gradients are of: the least-squares fit at the state.
-void DormandPrince::findDependentRows(Dynamics& system, const IntegratorState& at) {
-  dependentRows_.clear();
-  if (system.constraintCount() == 0) return;
-  Triplets iteration, jacobian;
-  system.tangent(at.t, at.q, at.v, at.vdot, at.lambda, 1.0, 0.0, 0.0, iteration, jacobian);
-  const ConstraintRank rank = constraintRank(denseJacobian(system, jacobian));
-  dependentRows_ = rank.vanishingRows;
-  for (const std::vector<int>& set : rank.dependentRows) dependentRows_.push_back(set.front());
-  std::sort(dependentRows_.begin(), dependentRows_.end());  // fitDependentRows merges in order
-}
-
-// The coefficients of each dependent row in the independent ones at the
-// Jacobian just assembled (least squares, a complete orthogonal
-// decomposition): once per assembly, for every solve with that matrix.
-void DormandPrince::fitDependentRows(const Dynamics& system) {
-  if (dependentRows_.empty()) return;
-  const Eigen::MatrixXd J = assembledJacobian(system);
-  const int m = int(J.rows());
-  independentRows_.clear();
-  for (int i = 0, k = 0; i < m; ++i) {
-    while (k < int(dependentRows_.size()) && dependentRows_[k] < i) ++k;
-    if (k == int(dependentRows_.size()) || dependentRows_[k] != i) independentRows_.push_back(i);
-  }
-  Eigen::MatrixXd independent(J.cols(), int(independentRows_.size())), dependent(J.cols(), int(dependentRows_.size()));
-  for (int k = 0; k < int(independentRows_.size()); ++k) independent.col(k) = J.row(independentRows_[k]).transpose();
-  for (int k = 0; k < int(dependentRows_.size()); ++k)
-    dependent.col(k) = dependentRows_[k] < m ? VectorXd(J.row(dependentRows_[k]).transpose()) : VectorXd::Zero(J.cols());
-  consistency_ = independentRows_.empty()
-                     ? Eigen::MatrixXd::Zero(int(dependentRows_.size()), 0)
-                     : Eigen::MatrixXd(Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(independent)
-                                           .solve(dependent)
-                                           .transpose());
-}
-
-void DormandPrince::makeConsistent(Eigen::Ref<VectorXd> rows) const {
-  if (dependentRows_.empty()) return;
-  VectorXd independent(int(independentRows_.size()));
-  for (int k = 0; k < int(independentRows_.size()); ++k) independent[k] = rows[independentRows_[k]];
-  for (int k = 0; k < int(dependentRows_.size()); ++k)
-    if (dependentRows_[k] < rows.size()) rows[dependentRows_[k]] = consistency_.row(k).dot(independent);
 }
 
 bool DormandPrince::restartAfterInputJump(Dynamics& system, IntegratorState& state, std::string& message) {
@@ -118,7 +62,6 @@ bool DormandPrince::accelerations(Dynamics& system, std::string& why) {
   }
   if (assembleIterationMatrix(system, at, 1.0, 0.0, 0.0))
     solver_.analyzePattern(assembledIterationMatrix(), pivotOrder(system, 1.0));
-  fitDependentRows(system);
   const SparseMatrix& A = assembledIterationMatrix();
   ++factorizations_;
   if (solver_.factorize(A) != LinearSolver::Status::Ok) {
@@ -129,7 +72,6 @@ bool DormandPrince::accelerations(Dynamics& system, std::string& why) {
   rhs_.head(n) = -r_;
   if (m > 0) {
     rhs_.segment(n, m) = -system.constraintAccelerationTerm(at.t, at.q, at.v);
-    makeConsistent(rhs_.segment(n, m));
   }
   solver_.solve(rhs_, x_);
   if (m > 0) {
@@ -139,7 +81,6 @@ bool DormandPrince::accelerations(Dynamics& system, std::string& why) {
       product_.noalias() = A * x_;
       correction_ = rhs_ - product_;
       correction_.segment(n, m) += regularization_.cwiseProduct(x_.segment(n, m));
-      makeConsistent(correction_.segment(n, m));
       solver_.solve(correction_, dx_);
       x_ += dx_;
     }
@@ -230,7 +171,6 @@ bool DormandPrince::project(Dynamics& system, IntegratorState& z, bool& moved, s
   for (int k = 0; k < 4 && phi_.cwiseAbs().maxCoeff() > floor; ++k) {
     rhs_.setZero(assembledIterationMatrix().rows());
     rhs_.segment(n, m) = -phi_;
-    makeConsistent(rhs_.segment(n, m));
     solver_.solve(rhs_, x_);
     delta_ = x_.head(n);
     system.retract(z.q, delta_);
@@ -242,12 +182,12 @@ bool DormandPrince::project(Dynamics& system, IntegratorState& z, bool& moved, s
     why = "the constraints are violated by " + numberText(violation) + " after 4 projections";
     return false;
   }
+  if (!redundantRowsHold(system, why)) return false;
   for (int sweep = 0; sweep < 2; ++sweep) {
     const VectorXd rates = system.velocityConstraints(z.t, z.q, z.v);
     if (rates.size() != m || !(rates.cwiseAbs().maxCoeff() > floor)) break;
     rhs_.setZero(assembledIterationMatrix().rows());
     rhs_.segment(n, m) = -rates;
-    makeConsistent(rhs_.segment(n, m));
     solver_.solve(rhs_, x_);
     z.v += x_.head(n);
     moved = true;

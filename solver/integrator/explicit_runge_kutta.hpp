@@ -59,15 +59,12 @@ class DormandPrince : public TimeStepper {
   void saveState(StateWriter& ar) override {
     TimeStepper::saveState(ar);
     solver_.saveOrLoad(ar);
-    ar(dependentRows_, extension_);
+    ar(extension_);
   }
   void loadState(StateReader& ar) override {
     TimeStepper::loadState(ar);
     solver_.saveOrLoad(ar);
-    ar(dependentRows_, extension_);
-    for (std::size_t k = 0; k < dependentRows_.size(); ++k)
-      if (dependentRows_[k] < 0 || (k > 0 && dependentRows_[k] <= dependentRows_[k - 1]))
-        throw StateError("its redundant constraint rows are not increasing row numbers");
+    ar(extension_);
   }
   bool fits(const IntegratorState& like) const override;
 
@@ -130,17 +127,6 @@ class DormandPrince : public TimeStepper {
       ar(h, q0, v0, delta[0], delta[1], delta[2], delta[3], v[0], v[1], v[2], v[3]);
     }
   } extension_;
-
-  // Redundant constraints (the Bricard mechanism: one row a combination of
-  // the others along the whole motion), found at the start by
-  // constraintRank: their right-hand sides are made consistent with the
-  // other rows' before each solve (see makeConsistent).
-  void findDependentRows(Dynamics& system, const IntegratorState& at);
-  void fitDependentRows(const Dynamics& system);
-  void makeConsistent(Eigen::Ref<VectorXd> rows) const;
-  std::vector<int> dependentRows_;  // increasing (the state); the rest is derived
-  std::vector<int> independentRows_;
-  Eigen::MatrixXd consistency_;     // dependent rows in the independent ones, at the last assembly
 
   LinearSolver solver_;
   IntegratorState stage_;  // the stage under way (t, q, v)

@@ -72,7 +72,10 @@ class GeneralizedAlpha : public TimeStepper {
   };
   MatrixFactors matrixFactors(double h) const;
   double constraintNoise(const Dynamics& system, int n, int m, int size) const;
-  void projectVelocities(Dynamics& system, IntegratorState& trial, double gammaPrime);
+  void projectVelocities(Dynamics& system, const IntegratorState& start, IntegratorState& trial, double gammaPrime,
+                         double betaPrime);
+  void matrixTimesProjection(Dynamics& system, const IntegratorState& start, const IntegratorState& trial,
+                             double gammaPrime, double betaPrime);
 
   double alphaM_, alphaF_, gamma_, beta_;
   bool perUnitStep_ = true;  // of the system advanced (beginAdvance)
@@ -80,6 +83,8 @@ class GeneralizedAlpha : public TimeStepper {
   MatrixRefreshPolicy refresh_;
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
+  VectorXd projection_, base_;  // projectVelocities' workspace: (dq, mu) so far, the residual at the trial
+  IntegratorState moved_;       // matrixTimesProjection's workspace
 
   // Members that carry over from one substep to the next (the rest is
   // workspace or constant): the Newton memory member by member, and the

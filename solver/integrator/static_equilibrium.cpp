@@ -111,7 +111,8 @@ bool StaticEquilibrium::solve(Dynamics& system, IntegratorState& s, VectorXd& in
   EquilibriumNewton problem(system, s, increment, solver_, assemble);
   MatrixRefreshPolicy fullNewton(MatrixRefreshPolicy::Kind::Full);
   return solveNewton(problem, CorrectionSizeTest(options_.tolerance), fullNewton, 0.0, options_.maxIterations,
-                     "reach equilibrium", why);
+                     "reach equilibrium", why) &&
+         redundantRowsHold(system, why);
 }
 
 }  // namespace mfbd

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "math/number_text.hpp"
 
@@ -55,6 +56,20 @@ void TimeStepper::iterationTriplets(Dynamics& system, const IntegratorState& at,
     const double eps = sMax > 0.0 ? 1e-8 * gMax * gMax / sMax : 1e-8;
     for (int i = n; i < n + m; ++i) all.emplace_back(i, i, -eps);
   }
+}
+
+// Rows left out as redundant are, to first order, a combination of the
+// others, so they hold where the others do, within a hundred times the
+// others' tolerance. Violated beyond that, the mechanism has left the
+// configuration that made them redundant (it started at a singular one:
+// the N-four-bar with its cranks on the x axis); they go back into the
+// solve, regularised as any row whose rank drops.
+bool TimeStepper::redundantRowsHold(Dynamics& system, std::string& why) const {
+  const double floor = 64.0 * std::numeric_limits<double>::epsilon() * system.constraintLengthScale();
+  const double violation = system.redundantViolation();
+  if (!(violation > 100.0 * std::max(options_.tolerance, floor)) || !system.readmitRedundantRows()) return true;
+  why = "constraint rows left out as redundant are violated by " + numberText(violation) + ": back in the solve";
+  return false;
 }
 
 SparseMatrix TimeStepper::iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC,

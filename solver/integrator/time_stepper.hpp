@@ -134,6 +134,11 @@ class TimeStepper {
     return options_.errorTolerance * options_.errorScale * h / options_.errorHorizon;
   }
 
+  // Whether the constraint rows left out as redundant hold at a state where
+  // the others are met (see the .cpp); if not, they are back in the solve
+  // and `why` says so: the substep is to be tried again.
+  bool redundantRowsHold(Dynamics& system, std::string& why) const;
+
   // The Newton matrix [S Phi_q^T; Phi_q -eps I] from the system's tangent,
   // auxiliary unknowns last.
   static SparseMatrix iterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK);
