@@ -15,7 +15,7 @@ numerical dissipation in the energy).
 
 Ours: build/fmus/bricard.fmu (a tree of five revolute joints in joint
 coordinates, the sixth joint a cut joint with five constraint rows of which
-one is redundant; the iteration matrix's constraint block is regularised).
+one is redundant, found at the start and left out of the solve).
 Newton: largest position increment 1e-12.
 
 Exudyn: five rigid bodies (NodeRigidBodyEP: Euler parameters, 7
