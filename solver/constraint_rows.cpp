@@ -195,12 +195,13 @@ VectorXd System::constraintAccelerationTerm(double t, const Configuration& q, co
   return gamma;
 }
 
-void System::leaveOutRedundantRows(VectorXd& rows, bool violation) {
-  if (violation) redundantViolation_ = 0.0;
+double System::leaveOutRedundantRows(VectorXd& rows) const {
+  double largest = 0.0;
   for (int row : redundantRows_) {
-    if (violation) redundantViolation_ = std::max(redundantViolation_, std::abs(rows[row]));
+    largest = std::max(largest, std::abs(rows[row]));
     rows[row] = 0.0;
   }
+  return largest;
 }
 
 const TwoMarkerConstraint& System::constraintAtRow(int firstRow) const {

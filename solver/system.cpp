@@ -173,7 +173,7 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
   if (!model_.bodies.empty()) {
     rigidResidual(t, q, v, vdot, lambda, rigid_, phi, &r);
     r.head(model_.rigidVelocityCount) = rigid_;
-    leaveOutRedundantRows(phi, true);
+    redundantViolation_ = leaveOutRedundantRows(phi);
   }
   if (failed) r.setConstant(std::numeric_limits<double>::quiet_NaN());
 }

@@ -188,9 +188,8 @@ class System : public Dynamics {
   double constraintLengthScale_ = 1.0;  // of the last residual
   std::vector<int> redundantRows_;     // see setRedundantRows
   double redundantViolation_ = 0.0;    // of the last residual
-  // Zeroes the redundant rows of a constraint vector (phi: recording their
-  // violation first).
-  void leaveOutRedundantRows(VectorXd& rows, bool violation = false);
+  // Zeroes the redundant rows of a constraint vector; the largest of them.
+  double leaveOutRedundantRows(VectorXd& rows) const;
   bool recursiveMatrix_ = false;  // Newton matrix in the recursive form (dynamics)
   std::vector<int> blockOfRate_;  // model_.blocks index of each rate
   // Sparsity of the rigid tangent: the joint rates that move each body (its

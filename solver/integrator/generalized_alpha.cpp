@@ -172,9 +172,9 @@ void GeneralizedAlpha::matrixTimesProjection(Dynamics& system, const IntegratorS
   if (!(largest > 0.0)) return;
   const double e = 1e-8 / largest;
   system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, base_, phi_);
-  moved_.a = hDeltaQ_ + e * projection_.head(n);
+  movedIncrement_ = hDeltaQ_ + e * projection_.head(n);
   moved_.q = start.q;
-  system.retract(moved_.q, moved_.a);
+  system.retract(moved_.q, movedIncrement_);
   moved_.v = trial.v + (gammaPrime * e) * projection_.head(n);
   moved_.vdot = trial.vdot + (betaPrime * e) * projection_.head(n);
   moved_.lambda = trial.lambda + (betaPrime * e) * projection_.tail(m);
@@ -372,7 +372,8 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
   trial.lambdaBefore.swap(s.lambda);
   trial.hBefore = h;
   trial.rejectedSubsteps = s.rejectedSubsteps;
-  if (alphaM_ == alphaF_ && system.constraintCount() > 0) projectVelocities(system, s, trial, problem.gammaPrime(), problem.betaPrime());
+  if (alphaM_ == alphaF_ && system.constraintCount() > 0)
+    projectVelocities(system, s, trial, problem.gammaPrime(), problem.betaPrime());
   std::swap(s, trial);  // trial keeps s's buffers for the next substep
   return true;
 }

@@ -83,8 +83,11 @@ class GeneralizedAlpha : public TimeStepper {
   MatrixRefreshPolicy refresh_;
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
-  VectorXd projection_, base_;  // projectVelocities' workspace: (dq, mu) so far, the residual at the trial
-  IntegratorState moved_;       // matrixTimesProjection's workspace
+  // projectVelocities' workspace: (dq, mu) so far, the residual at the
+  // trial, and the trial moved along the Newton direction (with the
+  // substep's increment to get there).
+  VectorXd projection_, base_, movedIncrement_;
+  IntegratorState moved_;
 
   // Members that carry over from one substep to the next (the rest is
   // workspace or constant): the Newton memory member by member, and the
