@@ -109,7 +109,7 @@ bool Instance::allow(const char* function, unsigned mask) {
 }
 
 fmi2Status Instance::setDebugLogging(bool on, std::size_t n, const fmi2String categories[]) {
-  std::set<std::string> chosen;
+  std::set<std::string, std::less<>> chosen;
   for (std::size_t i = 0; i < n; ++i) {
     const std::string c = categories && categories[i] ? categories[i] : "";
     bool known = false;

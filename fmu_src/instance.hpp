@@ -3,6 +3,7 @@
 #pragma once
 #include <map>
 #include <memory>
+#include <functional>
 #include <set>
 #include <string>
 #include <unordered_map>
@@ -109,7 +110,7 @@ class Instance {
   std::string name_;
   fmi2CallbackFunctions callbacks_{};
   bool loggingOn_ = false;
-  std::set<std::string> categories_;
+  std::set<std::string, std::less<>> categories_;  // transparent: looked up by const char*
   FmuState state_ = FmuState::Instantiated;
 
   std::string sceneText_;

@@ -57,16 +57,15 @@ void System::twoMarkerRowsAndForces(const VectorXd& lambda, VectorXd& phi, Vecto
     const ConstraintJacobian* jacobians[2] = {&c.jacobianParent, &c.jacobianChild};
     for (int s = 0; s < 2; ++s) {
       const ConstraintSide& side = *sides[s];
-      if (side.isGround()) continue;
+      if (side.isGround() || (side.onNode() && !nodeRows)) continue;
+      const Vec6 f = jacobians[s]->transpose() * l;  // Phi_z^T lambda on this side
       if (!side.onNode()) {
-        const Vec6 on = -jacobians[s]->transpose() * l;
-        data_.appliedForce[side.body] += on.head<3>();
-        data_.appliedTorque[side.body] += on.tail<3>();
+        data_.appliedForce[side.body] -= f.head<3>();
+        data_.appliedTorque[side.body] -= f.tail<3>();
         continue;
       }
-      if (!nodeRows) continue;
       const FlexNode& node = model_.flexible.nodes[side.node];
-      const Vec6 g = nodeVariation(nodes_[side.node]).transpose() * Vec6(jacobians[s]->transpose() * l);
+      const Vec6 g = nodeVariationTransposeTimes(nodes_[side.node], f);
       for (int d = 0; d < 6; ++d)
         if (node.dof[d] >= 0) (*nodeRows)[node.dof[d]] += node.P.col(d).dot(g);
     }

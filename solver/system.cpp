@@ -169,8 +169,8 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
     const bool inertia = model_.analysis == Analysis::Dynamic;
     failed = !flexibleResidual(model_.flexible, nodes_, model_.gravity, flexibleSignals_.current(), t, inertia, r);
   }
-  phi.resize(0);
-  if (!model_.bodies.empty()) {
+  if (model_.bodies.empty()) phi.resize(0);
+  else {
     rigidResidual(t, q, v, vdot, lambda, rigid_, phi, &r);
     r.head(model_.rigidVelocityCount) = rigid_;
     redundantViolation_ = leaveOutRedundantRows(phi);

@@ -84,6 +84,14 @@ inline Mat6 nodeVariation(const NodeState& s) {
   return W;
 }
 
+// W^T f: a world-frame [force; torque] f as the node's generalized force
+// (the torque in the node frame), without forming W.
+inline Vec6 nodeVariationTransposeTimes(const NodeState& s, const Vec6& f) {
+  Vec6 g;
+  g << f.head<3>(), s.pose.A.transpose() * f.tail<3>();
+  return g;
+}
+
 // How [dr; dphi] on a side varies with the Newton matrix's unknowns:
 // [dr; dphi] = map x, x the unknowns; `columns` pairs each unknown that can
 // be nonzero with its column of map.

@@ -186,7 +186,7 @@ double TimeStepper::nextStep(double h, double step, double ratio) const {
 AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double duration, bool inputsHeld) {
   AdvanceResult result;
   const bool past = inputsHeld && continuousExtension();
-  if (!past) ahead_ = {};
+  if (!past) ahead_.by = 0.0;
   if (keepsSubstepAhead() && duration <= ahead_.by) {
     if (answerAhead(system, s, s.t + duration, ahead_.by - duration, result)) ahead_.by -= duration;
     return result;
@@ -201,13 +201,12 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
   double tried = 0.0;  // substeps tried, rejected ones included
   int successes = 0;
   std::string rejected;  // why the last substep failed, until one succeeds
+  // Every path returns `result` itself (returned in place, no copy).
   auto fail = [&](const std::string& message) {
     result.ok = false;
     result.reachedTime = s.t;
     result.message = message;
-    return result;
   };
-  IntegratorState from;  // the start of a substep taken past the end
   while (elapsed < duration) {
     // The rest in equal substeps of at most h (within round-off): no short
     // last one, and every substep of a run at constant h the same size, so
@@ -218,14 +217,13 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
     const double remaining = duration - elapsed;
     const double count = std::max(1.0, std::ceil(remaining / h * (1.0 - 1e-9)));
     if (!(tried + count <= options_.maxSubsteps)) {
-      return fail(rejected + (rejected.empty() ? "the step of " : "; the step of ") + numberText(duration) +
-                  " s would need " + numberText(tried + count) + " substeps of at most " + numberText(h) +
-                  " s, more than solver.max_substeps = " + numberText(options_.maxSubsteps));
+      fail(tooManySubsteps(rejected, duration, tried + count, h));
+      return result;
     }
     const bool last = count == 1.0;
     const bool beyond = past && last && h > remaining * (1.0 + 1e-9);
     const double step = beyond || (past && !last) ? h : last ? remaining : remaining / count;
-    if (beyond) from = s;
+    if (beyond) substepStart_ = s;
     ++tried;
     std::string why;
     errorRatio_ = 0.0;
@@ -241,8 +239,9 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
       }
       if (beyond) {
         // Keep the substep, answer at the end from its extension.
-        keepExtension(from, step);
-        ahead_ = {elapsed + step - duration, s};
+        keepExtension(substepStart_, step);
+        ahead_.by = elapsed + step - duration;
+        ahead_.end = s;
         s.h = h;
         answerAhead(system, s, start + duration, ahead_.by, result);
         return result;
@@ -253,13 +252,25 @@ AdvanceResult TimeStepper::advance(Dynamics& system, IntegratorState& s, double 
     }
     successes = 0;
     h = afterRejection(s, step, why, result, rejected);
-    if (h < options_.hMin) return fail(rejected);
+    if (h < options_.hMin) {
+      fail(rejected);
+      return result;
+    }
   }
-  ahead_ = {};
+  ahead_.by = 0.0;
   s.t = start + duration;
   s.h = h;
   result.reachedTime = s.t;
   return result;
+}
+
+// Why an advance over `duration` gives up: the rest would need `needed`
+// substeps of at most h, more than allowed (after `rejected`, if any).
+std::string TimeStepper::tooManySubsteps(const std::string& rejected, double duration, double needed,
+                                         double h) const {
+  return rejected + (rejected.empty() ? "the step of " : "; the step of ") + numberText(duration) +
+         " s would need " + numberText(needed) + " substeps of at most " + numberText(h) +
+         " s, more than solver.max_substeps = " + numberText(options_.maxSubsteps);
 }
 
 // Goes on from the end of the substep kept past the last advance's end
@@ -301,7 +312,7 @@ bool TimeStepper::answerAhead(Dynamics& system, IntegratorState& s, double t, do
     result.reachedTime = t;
     return true;
   }
-  ahead_ = {};
+  ahead_.by = 0.0;
   result.ok = false;
   result.reachedTime = t;
   result.message = "the continuous extension of the last substep failed at t = " + numberText(t) + ": " + why;

@@ -59,7 +59,7 @@ class TimeStepper {
   // ones): forget a substep taken past state.t with the old ones, and adjust
   // the integrator's history to the new ones (restartAfterInputJump).
   bool inputsJumped(Dynamics& system, IntegratorState& state, std::string& message) {
-    ahead_ = {};
+    ahead_.by = 0.0;
     return restartAfterInputJump(system, state, message);
   }
   // Substeps over `duration` from state.t, at most options().maxSubsteps
@@ -79,7 +79,10 @@ class TimeStepper {
   // What influences the next substeps beyond IntegratorState: the kept
   // Newton matrix (recomputed on restore from what it was made of) and the
   // policy that decides when to refresh it.
-  virtual void saveState(StateWriter& ar) { ar(iteration_, ahead_.by, ahead_.end); }
+  virtual void saveState(StateWriter& ar) {
+    if (!keepsSubstepAhead()) ahead_.end = {};  // a forgotten one's buffers are not state
+    ar(iteration_, ahead_.by, ahead_.end);
+  }
   virtual void loadState(StateReader& ar);
   // Whether what loadState read has the shapes of `like` (the caller's
   // checked state): a substep kept past the state's time must.
@@ -178,13 +181,16 @@ class TimeStepper {
   Triplets iterationTriplets_, jacobianTriplets_;
   SparseAssembly iteration_;
   // The last substep of an advance taken past its end: its end state,
-  // `by` seconds past the state's time (0: none).
+  // `by` seconds past the state's time (0: none; forgotten by setting it
+  // to 0, so the end state's buffers serve the next one).
   struct Ahead {
     double by = 0.0;
     IntegratorState end;
   } ahead_;
+  IntegratorState substepStart_;  // advance's workspace: the start of a substep taken past the end
   bool answerAhead(Dynamics& system, IntegratorState& s, double t, double beforeEnd, AdvanceResult& result);
   double resumeAhead(IntegratorState& s) const;
+  std::string tooManySubsteps(const std::string& rejected, double duration, double needed, double h) const;
   double afterRejection(IntegratorState& s, double step, const std::string& why, AdvanceResult& result,
                         std::string& rejected) const;
 };
