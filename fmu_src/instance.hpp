@@ -1,9 +1,9 @@
 // One FMU instance: the FMI 2.0 Co-Simulation state machine (checked in one
 // place, `allow`), the variable table, start values, and the Simulation.
 #pragma once
+#include <functional>
 #include <map>
 #include <memory>
-#include <functional>
 #include <set>
 #include <string>
 #include <unordered_map>
