@@ -169,8 +169,9 @@ void System::residual(double t, const Configuration& q, const VectorXd& v, const
     const bool inertia = model_.analysis == Analysis::Dynamic;
     failed = !flexibleResidual(model_.flexible, nodes_, model_.gravity, flexibleSignals_.current(), t, inertia, r);
   }
-  if (model_.bodies.empty()) phi.resize(0);
-  else {
+  if (model_.bodies.empty()) {
+    phi.resize(0);
+  } else {  // rigidResidual sizes phi (no reallocation per residual)
     rigidResidual(t, q, v, vdot, lambda, rigid_, phi, &r);
     r.head(model_.rigidVelocityCount) = rigid_;
     redundantViolation_ = leaveOutRedundantRows(phi);
