@@ -15,12 +15,20 @@ m g L; stopTime is passed, so the tolerance holds over the run.
   R5 slider-crank: slider position against x(theta) of shared/benchmarks;
      a fully driven mechanism, so generalized-alpha or not, its error is
      round-off at every tolerance: shown, not a proportionality case.
-  F3 cantilever (16 elements): tip deflection over 2 s (every 0.01 s)
+  F3 cantilever (16 elements): tip deflection over 2 s (every 0.05 s)
      against the same mesh at h = 2.5e-5 and 1.25e-5 extrapolated
-     (Richardson, order 2); L = 1 m; generalized-alpha.
-  F4 spin-up beam (8 elements): tip position over 4 s (every 0.04 s)
+     (Richardson, order 2); L = 1 m; generalized-alpha. The tip pulse is
+     0.25 s long with a peak of 0.1 EI/L^2 (tip swing 1.5e-2 L):
+     the example's 0.02 s pulse of 0.01 EI/L^2 swings the tip by about
+     1.3e-4 L, so at a tolerance of 1e-3 any answer, the beam at rest
+     included, is within 0.13 times it, and a 0.02 s pulse needs substeps
+     below the 0.05 s sampling to be seen at all (README, Error control).
+  F4 spin-up beam (8 elements): tip position over 4 s (every 0.2 s)
      against the same mesh at h = 1e-4 and 5e-5 extrapolated; L = 10 m;
      generalized-alpha.
+     F3 and F4 are sampled coarsely so that the tolerance, not the
+     sampling, sizes the substeps: generalized-alpha lands on every
+     communication point (h_max is the sampling interval in this study).
   F5 flexible slider-crank (8 elements): the rod's mid and end node
      positions over 0.4 s (every 1 ms) against the same mesh at h = 2.5e-6
      and 1.25e-6 extrapolated; L = 0.45 m; generalized-alpha; 1e-3 .. 1e-6
@@ -78,8 +86,11 @@ class Problem:
     def error(self, samples):
         raise NotImplementedError
 
+    parameters = {}  # start values of the scene's parameters
+
     def measure(self, tolerance):
-        s, wall, statistics, integrator = run(self.fmu, self.names, self.stop, self.output, tolerance)
+        s, wall, statistics, integrator = run(self.fmu, self.names, self.stop, self.output, tolerance,
+                                              self.parameters)
         return dict(error=self.error(s), wall_time_s=wall, integrator=integrator, **statistics)
 
 
@@ -137,8 +148,9 @@ class Extrapolated(Problem):
     def reference(self):
         if not hasattr(self, "_reference"):
             h = self.reference_step
-            coarse = run(self.fmu, self.names, self.stop, self.output, None, {"solver.h_max": h})[0]
-            fine = run(self.fmu, self.names, self.stop, self.output, None, {"solver.h_max": h / 2})[0]
+            coarse = run(self.fmu, self.names, self.stop, self.output, None, {**self.parameters, "solver.h_max": h})[0]
+            fine = run(self.fmu, self.names, self.stop, self.output, None,
+                       {**self.parameters, "solver.h_max": h / 2})[0]
             self._reference = fine + (fine - coarse) / 3.0
             self.reference_error = float(np.max(np.abs(fine - coarse))) / 3.0 / self.scale
         return self._reference
@@ -148,12 +160,13 @@ class Extrapolated(Problem):
 
 
 class F3(Extrapolated):
-    label, example, stop, output, scale, reference_step = "F3", "cantilever_vibration", 2.0, 0.01, 1.0, 2.5e-5
+    label, example, stop, output, scale, reference_step = "F3", "cantilever_vibration", 2.0, 0.05, 1.0, 2.5e-5
     names = ["beam.node16.position.x", "beam.node16.position.y"]
+    parameters = {"pulse": 0.25, "peak": 0.1}
 
 
 class F4(Extrapolated):
-    label, example, stop, output, scale, reference_step = "F4", "spin_up_beam", 4.0, 0.04, 10.0, 1e-4
+    label, example, stop, output, scale, reference_step = "F4", "spin_up_beam", 4.0, 0.2, 10.0, 1e-4
     names = ["beam.node8.position.x", "beam.node8.position.y"]
 
 

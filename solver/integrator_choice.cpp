@@ -45,11 +45,9 @@ IntegratorChoice chooseIntegrator(const Scene& scene, System& system, SolverOpti
   if (options.errorTolerance <= 0.0)
     return generalizedAlpha(options, "no error tolerance (fmi2SetupExperiment without one): substeps of h_max");
   if (flexible)
-    return generalizedAlpha(options, std::string("flexible bodies (stiff)") +
-                                         (options.errorTolerance < 1e-5
-                                              ? "; their error is held per step, which below a tolerance of 1e-5 "
-                                                "may end above it (docs/design.md, Error control)"
-                                              : ""));
+    return generalizedAlpha(options, "flexible bodies (stiff); the error of modes slower than h_max = " +
+                                         numberText(options.hMax) + " s is held per unit step, of faster ones "
+                                         "per step (README, Error control)");
   // Below the output interval h_max caps the substeps: there a substep of
   // generalized-alpha (Newton with a kept matrix) costs a fraction of the
   // explicit method's six stage solves, and the explicit method's order

@@ -87,6 +87,19 @@ bool GeneralizedAlpha::factorize(Dynamics& system, const IntegratorState& trial,
   return true;
 }
 
+void GeneralizedAlpha::loadState(StateReader& ar) {
+  TimeStepper::loadState(ar);
+  visitState(ar);
+  if (!cutoffMatrix_.valid()) throw StateError("the saved cutoff matrix's pattern is inconsistent");
+}
+
+void GeneralizedAlpha::solveTurned(const Dynamics& system, const LinearSolver& A, const Configuration& origin,
+                                   const Configuration& q, VectorXd& b, VectorXd& x) const {
+  system.turnWithRotations(origin, q, b, true);
+  A.solve(b, x);
+  system.turnWithRotations(origin, q, x, false);
+}
+
 bool GeneralizedAlpha::restoreNewtonMemory(Dynamics& system, const NewtonMemory& memory) {
   refresh_.memory = memory;
   if (memory.factoredStep <= 0.0) return true;
@@ -150,9 +163,7 @@ void GeneralizedAlpha::projectVelocities(Dynamics& system, const IntegratorState
     rhs_.setZero(assembledIterationMatrix().rows());
     rhs_.segment(n, m) = -violation / gammaPrime;
     if (sweep > 0 && keptMatrix) matrixTimesProjection(system, start, trial, gammaPrime, betaPrime);
-    system.turnWithRotations(refresh_.memory.origin.q, trial.q, rhs_, true);
-    solver_.solve(rhs_, delta_);
-    system.turnWithRotations(refresh_.memory.origin.q, trial.q, delta_, false);
+    solveTurned(system, solver_, refresh_.memory.origin.q, trial.q, rhs_, delta_);
     if (!delta_.allFinite()) return;
     projection_ += delta_.head(n + m);
     trial.v += gammaPrime * delta_.head(n);
@@ -225,13 +236,10 @@ class SubstepNewton : public NewtonSystem {
   // a NaN check (0 d sums to 0 unless some d is not finite).
   double correct() override {
     VectorXd &rhs = ga_.rhs_, &delta = ga_.delta_;
-    const Configuration& origin = ga_.refresh_.memory.origin.q;
     rhs.setZero(ga_.assembledIterationMatrix().rows());
     rhs.head(n_) = -ga_.r_ / betaPrime_;
     rhs.segment(n_, m_) = -ga_.phi_;
-    system_.turnWithRotations(origin, trial_.q, rhs, true);
-    ga_.solver_.solve(rhs, delta);
-    system_.turnWithRotations(origin, trial_.q, delta, false);
+    ga_.solveTurned(system_, ga_.solver_, ga_.refresh_.memory.origin.q, trial_.q, rhs, delta);
     ++trial_.newtonIterations;
     double size = 0.0, notFinite = 0.0;
     const double* d = delta.data();
@@ -275,22 +283,59 @@ class SubstepNewton : public NewtonSystem {
 // vdot_n (the algorithmic acceleration lags by (alpha_m - alpha_f) h_{n-1}),
 // which an estimate of order h would see after every change of step size
 // however small the substep.
-//
-// Held per unit step (tol L h / T): the local errors add up over the run,
-// so the error reached follows the tolerance. With flexible bodies the
-// estimate is dominated by modes the substep is not meant to resolve (a
-// beam's axial and shear modes): it falls as h^3 only once h resolves the
-// stiffest of them (a steel rod's axial mode: 1e-8 s), and their errors do
-// not add up, the numerical damping (rho_inf < 1) removes them. There it
-// is held per step (tol L): per unit step discarded flexible_four_bar at
-// its first step (substeps of 1e-7 s would have been needed). A stiff
-// spring is the user's own stiffness and is resolved: held per step, the
-// 1e9 N/m spring pendulum ended 3.7e-3 m off at tolerance 1e-4.
-double GeneralizedAlpha::localError(const IntegratorState& s, const IntegratorState& trial, double h) const {
+double GeneralizedAlpha::localError(const IntegratorState& s, const IntegratorState& trial, double h) {
   if (s.vdot.size() == 0) return 0.0;
-  const double largest =
-      ((0.5 - beta_) * s.a + beta_ * trial.a - s.vdot / 3.0 - trial.vdot / 6.0).cwiseAbs().maxCoeff();
-  return h * h * largest;
+  localError_ = h * h * ((0.5 - beta_) * s.a + beta_ * trial.a - s.vdot / 3.0 - trial.vdot / 6.0);
+  return localError_.cwiseAbs().maxCoeff();
+}
+
+// The estimate against the error allowed. Held per unit step (tol L h / T):
+// local errors add up over the run, so the error reached follows the
+// tolerance. With flexible bodies the estimate also holds modes the
+// substep is not meant to resolve (a beam's axial and shear modes, up to
+// 1e8 rad/s): held per unit step they would be resolved (flexible_four_bar
+// needed substeps of 1e-7 s), and their errors do not add up, the
+// numerical damping (rho_inf < 1) removes them. So the estimate e is split
+// by the Newton matrix at h_max, S_c = M + (gamma'/beta') C + K/beta':
+// e_slow = S_c^-1 M e keeps the modes slower than about 1 / h_max (each
+// mode scaled by 1 / (1 + beta h_max^2 omega^2)) and is held per unit step;
+// the rest per step (tol L). h_max is where the user says the motion of
+// interest ends; a split at the substep's own size would pass every mode
+// as h shrinks and resolve them all. M e is the residual's change with
+// vdot by e; the solve is constrained, so e_slow respects the joints. S_c
+// does not depend on h: it is made again once the motion has gone on by
+// h_max, its own step, and turned with the rotations in between as the
+// Newton matrix is. Where S_c is singular (a beam buckling under a step
+// of h_max) the whole estimate is held per step.
+double GeneralizedAlpha::errorRatio(Dynamics& system, const IntegratorState& trial, double h, double local) {
+  const double perStep = options_.errorTolerance * options_.errorScale;
+  if (!splitsError()) return local / allowedLocalError(h);
+  if (localError_.size() == 0) return 0.0;
+  if (!(std::abs(trial.t - cutoffOrigin_.t) < options_.hMax) && !factorizeCutoff(system, trial))
+    return local / perStep;
+  const int n = system.velocityCount();
+  VectorXd& vdot = slowError_;  // workspace until the solve
+  vdot = trial.vdot + localError_;
+  system.residual(trial.t, trial.q, trial.v, vdot, trial.lambda, massTimesError_, phi_);
+  system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, r_, phi_);
+  rhs_.setZero(cutoffMatrix_.matrix().rows());
+  rhs_.head(n) = massTimesError_ - r_;
+  solveTurned(system, cutoff_, cutoffOrigin_.q, trial.q, rhs_, delta_);
+  slowError_ = delta_.head(n);
+  const double slow = slowError_.cwiseAbs().maxCoeff();
+  const double fast = (localError_ - slowError_).cwiseAbs().maxCoeff();
+  return std::max(slow / allowedLocalError(h), fast / perStep);
+}
+
+bool GeneralizedAlpha::factorizeCutoff(Dynamics& system, const IntegratorState& at) {
+  const MatrixFactors k = matrixFactors(options_.hMax);
+  if (assembleIterationMatrix(system, at, k.cM, k.cC, k.cK, cutoffMatrix_))
+    cutoff_.analyzePattern(cutoffMatrix_.matrix(), pivotOrder(system, k.cM));
+  cutoffOrigin_.t = at.t;
+  cutoffOrigin_.q = at.q;
+  if (cutoff_.factorize(cutoffMatrix_.matrix()) == LinearSolver::Status::Ok) return true;
+  cutoffOrigin_.t = std::numeric_limits<double>::quiet_NaN();  // made again at the next substep
+  return false;
 }
 
 // Predictor of vdot and lambda at the substep's end. Rigid systems: linear
@@ -358,7 +403,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
   const double local = localError(s, trial, h);
   refresh_.addDiscretisationError(local);
   if (errorControlled()) {
-    errorRatio_ = local / allowedError(h);
+    errorRatio_ = errorRatio(system, trial, h, local);
     if (!(errorRatio_ <= 1.0)) {
       errorRejected_ = true;
       why = "local error estimate " + numberText(errorRatio_) + " times the tolerance";

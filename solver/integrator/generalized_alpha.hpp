@@ -11,6 +11,7 @@
 // of the step start and reports a discarded step.
 #pragma once
 #include <algorithm>
+#include <limits>
 
 #include "integrator/newton.hpp"
 #include "integrator/time_stepper.hpp"
@@ -31,10 +32,7 @@ class GeneralizedAlpha : public TimeStepper {
     TimeStepper::saveState(ar);
     visitState(ar);
   }
-  void loadState(StateReader& ar) override {
-    TimeStepper::loadState(ar);
-    visitState(ar);
-  }
+  void loadState(StateReader& ar) override;
   // The memory of the Newton iteration, everything of it that influences
   // the next substep (for FMU state). Restoring refactorises the kept
   // matrix at its origin; false if that matrix is singular.
@@ -48,23 +46,26 @@ class GeneralizedAlpha : public TimeStepper {
   bool substep(Dynamics& system, IntegratorState& state, double h, std::string& why) override;
   void beginAdvance(const Dynamics& system) override {
     refresh_.beginAdvance(system.tangentCost());
-    perUnitStep_ = !system.flexibleBodies();
+    flexibleBodies_ = system.flexibleBodies();
   }
   bool errorControlled() const override { return options_.errorTolerance > 0.0; }
-  // The local error a substep may make (see localError): per unit step,
-  // tol L h / T, where the local errors add up over the run; per step, tol
-  // L, with flexible bodies.
-  double allowedError(double h) const {
-    return perUnitStep_ ? allowedLocalError(h) : options_.errorTolerance * options_.errorScale;
-  }
-  // The estimate goes as h^3: its ratio to the error allowed as h^2 per
-  // unit step, h^3 per step.
-  StepControl stepControl() const override { return {perUnitStep_ ? 2.0 : 3.0, 1.25}; }
+  // The estimate goes as h^3, held per unit step (h^2 against the error
+  // allowed) in the modes that add up (see errorRatio).
+  StepControl stepControl() const override { return {2.0, 1.25}; }
 
  private:
   friend class SubstepNewton;
   bool factorize(Dynamics& system, const IntegratorState& trial, double h);
-  double localError(const IntegratorState& s, const IntegratorState& trial, double h) const;
+  double localError(const IntegratorState& s, const IntegratorState& trial, double h);
+  double errorRatio(Dynamics& system, const IntegratorState& trial, double h, double local);
+  // Error control with flexible bodies splits the local error by the Newton
+  // matrix at h_max, S_c (errorRatio).
+  bool splitsError() const { return errorControlled() && flexibleBodies_; }
+  bool factorizeCutoff(Dynamics& system, const IntegratorState& at);
+  // x = A^-1 b for a matrix A factorised at `origin`, turned with the
+  // rotations from there to q (b is overwritten).
+  void solveTurned(const Dynamics& system, const LinearSolver& A, const Configuration& origin,
+                   const Configuration& q, VectorXd& b, VectorXd& x) const;
   void predict(Dynamics& system, const IntegratorState& s, double h, IntegratorState& trial);
   // Factors of M, C and K in the scaled Newton matrix: 1, gamma'/beta', 1/beta'.
   struct MatrixFactors {
@@ -78,8 +79,16 @@ class GeneralizedAlpha : public TimeStepper {
                              double gammaPrime, double betaPrime);
 
   double alphaM_, alphaF_, gamma_, beta_;
-  bool perUnitStep_ = true;  // of the system advanced (beginAdvance)
+  bool flexibleBodies_ = false;  // in the system advanced (beginAdvance)
   LinearSolver solver_;
+  // S_c (splitsError), factorised at cutoffOrigin_ (t NaN: not yet).
+  SparseAssembly cutoffMatrix_;
+  LinearSolver cutoff_;
+  struct {
+    double t = std::numeric_limits<double>::quiet_NaN();
+    Configuration q;
+  } cutoffOrigin_;
+  VectorXd localError_, massTimesError_, slowError_;  // errorRatio's workspace
   MatrixRefreshPolicy refresh_;
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
@@ -99,6 +108,8 @@ class GeneralizedAlpha : public TimeStepper {
     ar(m.correctionNoise, m.elasticCoordinates, m.freshStarts, m.lastIterations, m.substepsSinceFactorization);
     ar(m.firstRate, m.lastRate, m.newtonErrorLeft, m.discretisationError);
     solver_.saveOrLoad(ar);
+    ar(cutoffMatrix_, cutoffOrigin_.t, cutoffOrigin_.q);
+    cutoff_.saveOrLoad(ar);
   }
 };
 

@@ -24,7 +24,7 @@ struct SolverOptions {
   // units of errorScale, the scene's length scale (rad against errorScale /
   // 1 m). How each stepper holds it per substep (per unit step, tol L h /
   // T; per step) is said where it does (TimeStepper::allowedLocalError,
-  // GeneralizedAlpha::allowedError, DormandPrince::errorRatio). 0: no
+  // GeneralizedAlpha::errorRatio, DormandPrince::errorRatio). 0: no
   // control, substeps of h_max.
   double errorTolerance = 0.0;
   double errorScale = 1.0;

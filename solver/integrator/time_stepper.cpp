@@ -90,9 +90,9 @@ SparseMatrix TimeStepper::unregularized(const Dynamics& system, SparseMatrix S) 
 }
 
 bool TimeStepper::assembleIterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC,
-                                          double cK) {
+                                          double cK, SparseAssembly& into) {
   iterationTriplets(system, at, cM, cC, cK, iterationTriplets_, jacobianTriplets_);
-  return iteration_.assign(newtonSize(system, cM), iterationTriplets_);
+  return into.assign(newtonSize(system, cM), iterationTriplets_);
 }
 
 Eigen::MatrixXd TimeStepper::denseJacobian(const Dynamics& system, const Triplets& jacobian) {

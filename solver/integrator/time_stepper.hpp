@@ -156,7 +156,12 @@ class TimeStepper {
   // The same (regularised) matrix into assembledIterationMatrix(), reusing
   // the pattern and the triplet storage of the previous call; true when the
   // pattern is new and needs a symbolic analysis.
-  bool assembleIterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK);
+  bool assembleIterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK) {
+    return assembleIterationMatrix(system, at, cM, cC, cK, iteration_);
+  }
+  // The same into another assembly (a second matrix kept beside it).
+  bool assembleIterationMatrix(Dynamics& system, const IntegratorState& at, double cM, double cC, double cK,
+                               SparseAssembly& into);
   // Rows of the Newton matrix with mass factor cM: velocities, multipliers
   // (from velocityCount() on) and the system's auxiliary unknowns.
   static int newtonSize(const Dynamics& system, double cM);

@@ -178,7 +178,12 @@ def test_flexible_four_bar_with_a_joint_defect_turns_a_full_revolution(tmp_path)
     violations = [r[k].max() for k in r.dtype.names if k.endswith("flexible_body_joint.violation")]
     assert len(violations) == 6 and max(violations) < 1e-10
     tip = np.column_stack([r[f"bar3.node0.position.{c}"] for c in "xyz"])
-    assert np.abs(tip[-1] - tip[0]).max() < 1e-6  # measured 7e-10 m
+    # Back to the start within the tolerance (1e-3 L, L = 0.27 m), with the
+    # bars' undamped vibration from the start of the drive (measured 3.5e-5
+    # m; 7e-10 m under the earlier rule that held the whole error estimate
+    # per step, whose positions at 1 s were as far from a fine-step
+    # reference, 7.5e-5 m: the return measures the numerical damping).
+    assert np.abs(tip[-1] - tip[0]).max() < 1e-4
     assert 1e-3 < np.abs(tip[:, 1]).max() < 1e-2  # the defect pushes joint C out of the plane by millimetres
     assert np.abs(r["bar1.element0.end1.moment.z"]).max() > 50.0  # the bars carry the locking moment (~159 N m)
 
