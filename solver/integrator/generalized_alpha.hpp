@@ -89,6 +89,18 @@ class GeneralizedAlpha : public TimeStepper {
     Configuration q;
   } cutoffOrigin_;
   VectorXd localError_, massTimesError_, slowError_;  // errorRatio's workspace
+  // How far each coordinate has moved since initialize: the sum of the
+  // accepted substeps' chart increments and the range it has covered
+  // (errorRatio). Angles of rotations summed so are not a rotation's
+  // angle, but they bound its motion.
+  struct MotionRange {
+    VectorXd displacement, low, high;
+    void add(const VectorXd& increment) {
+      displacement += increment;
+      low = low.cwiseMin(displacement);
+      high = high.cwiseMax(displacement);
+    }
+  } motion_;
   MatrixRefreshPolicy refresh_;
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
@@ -108,7 +120,7 @@ class GeneralizedAlpha : public TimeStepper {
     ar(m.correctionNoise, m.elasticCoordinates, m.freshStarts, m.lastIterations, m.substepsSinceFactorization);
     ar(m.firstRate, m.lastRate, m.newtonErrorLeft, m.discretisationError);
     solver_.saveOrLoad(ar);
-    ar(cutoffMatrix_, cutoffOrigin_.t, cutoffOrigin_.q);
+    ar(cutoffMatrix_, cutoffOrigin_.t, cutoffOrigin_.q, motion_.displacement, motion_.low, motion_.high);
     cutoff_.saveOrLoad(ar);
   }
 };
