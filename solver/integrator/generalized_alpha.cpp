@@ -308,18 +308,18 @@ double GeneralizedAlpha::localError(const IntegratorState& s, const IntegratorSt
 // the rest per step (tol L). h_max is where the user says the motion of
 // interest ends; a split at the substep's own size would pass every mode
 // as h shrinks and resolve them all. M e is the residual's change with
-// vdot by e; the solve is constrained, so e_slow respects the joints.
-// Errors add up only as far as the motion goes: an oscillation's phase
-// error is at most twice its amplitude. So a coordinate whose motion since
-// the start has stayed within a range of tol L holds all its estimate per
-// step (F3's tip pulse of 1.3e-4 L at tolerance 1e-3 took 6,454 substeps
-// of its 10 s where 1,000 of h_max are as right). The motion is the sum
-// of the substeps' chart increments (MotionRange). S_c
+// vdot by e; the solve is constrained, so e_slow respects the joints. S_c
 // does not depend on h: it is made again with a fresh Newton matrix once
 // the motion has gone on by h_max, its own step (factorize), and turned
 // with the rotations in between as the Newton matrix is. Where S_c is
 // singular (a beam buckling under a step of h_max) the whole estimate is
 // held per step.
+// Errors add up only as far as the motion goes: an oscillation's phase
+// error is at most twice its amplitude. So a coordinate whose motion since
+// the start has stayed within a range of tol L holds all its estimate per
+// step (F3's tip pulse of 1.3e-4 L at tolerance 1e-3 took 6,454 substeps
+// of its 10 s where 1,000 of h_max are as right). The motion is the sum
+// of the substeps' chart increments (MotionRange).
 double GeneralizedAlpha::errorRatio(Dynamics& system, const IntegratorState& trial, double h, double local) {
   const double perStep = options_.errorTolerance * options_.errorScale;
   if (!splitsError()) return local / allowedLocalError(h);

@@ -237,3 +237,36 @@ def test_flexible_error_follows_the_tolerance(tmp_path):
     for tolerance in (1e-4, 1e-6):
         error = np.max(np.abs(cantilever_tip(fmu, tolerance, stop, pulse) - reference))  # L = 1 m
         assert 0.1 * tolerance < error < 10 * tolerance, (tolerance, error)
+
+
+def substeps_of_a_run(fmu, tolerance, stop, start_values):
+    """Substeps and rejected substeps of a run in steps of 0.01 s (the
+    logStatistics line of fmi2Terminate)."""
+    import re
+    slave = Slave(fmu)
+    try:
+        assert slave.instantiate(logging_on=True), slave.messages()
+        assert slave.call("setDebugLogging", True, ["logStatistics"]) == OK
+        assert slave.call("setupExperiment", tolerance, 0.0, stop) == OK
+        for name, value in start_values.items():
+            assert slave.set(name, value) == OK, slave.messages()
+        assert slave.call("enterInitializationMode") == OK and slave.call("exitInitializationMode") == OK
+        for k in range(int(round(stop / 0.01))):
+            assert slave.step(0.01 * k, 0.01) == OK, slave.messages()
+        assert slave.call("terminate") == OK
+        line = [m for _, c, m in slave.log if c == "logStatistics"][-1]
+        return int(re.search(r"substeps (\d+)", line).group(1)), int(re.search(r"rejected (\d+)", line).group(1))
+    finally:
+        slave.free()
+
+
+def test_motion_within_the_tolerance_is_not_refined(tmp_path):
+    # An oscillation's error is at most twice its amplitude: the example's
+    # tip pulse swings the tip by 1.3e-4 L, so at tolerance 1e-3 substeps of
+    # h_max are right and are taken (held per unit step: 402 substeps, 12
+    # rejected). The 0.25 s pulse swinging it by 1.5e-2 L is followed.
+    fmu = packed(load_scene("cantilever_vibration"), tmp_path)
+    small = substeps_of_a_run(fmu, 1e-3, 2.0, {"solver.h_max": 0.01})
+    assert small == (200, 0), small
+    large = substeps_of_a_run(fmu, 1e-3, 2.0, {"solver.h_max": 0.01, "pulse": 0.25, "peak": 0.1})
+    assert large[0] > 250, large  # measured 319
