@@ -35,9 +35,9 @@ what it imposes, an ObjectConnectorCoordinate holding the end node's y at 0
 Wall time: the whole 0.4 s run, outputs every 1 ms in both codes.
 
 Ours by tolerance: our FMU driven by fmi2SetupExperiment's relative
-tolerance 1e-3 ... 1e-8 over the 0.4 s (stopTime passed), h_max = the
+tolerance 1e-3 ... 1e-6 over the 0.4 s (stopTime passed), h_max = the
 output interval 1e-3 s, the FMU's choice of integrator (generalized-alpha,
-the local error held per substep for flexible bodies), Newton tolerance
+the local error split at h_max for flexible bodies), Newton tolerance
 following the error tolerance. One series over every mesh of the pairs (a
 user picks the mesh for the spatial error, the tolerance for the time
 error; n = 32's runs at tolerance 1e-7 and 1e-8 are 6.8e-8 and 3.9e-7 m from the

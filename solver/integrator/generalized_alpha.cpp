@@ -326,7 +326,10 @@ double GeneralizedAlpha::errorRatio(Dynamics& system, const IntegratorState& tri
   if (localError_.size() == 0) return 0.0;
   if (std::isnan(cutoffOrigin_.t) && !factorizeCutoff(system, trial)) return local / perStep;
   const int n = system.velocityCount();
-  if (motion_.displacement.size() != n) return local / perStep;
+  // Nothing has moved by tol L yet: all of the estimate is held per step,
+  // and the split would not change the ratio.
+  if (motion_.displacement.size() != n || !((motion_.high - motion_.low).array() > perStep).any())
+    return local / perStep;
   VectorXd& vdot = slowError_;  // workspace until the solve
   vdot = trial.vdot + localError_;
   system.residual(trial.t, trial.q, trial.v, vdot, trial.lambda, massTimesError_, phi_);
