@@ -29,8 +29,10 @@ constexpr char kMagic[8] = {'M', 'F', 'B', 'D', 'S', 'T', 'A', 'T'};
 // generalized-alpha's Newton memory holds the error Newton left and the
 // local discretisation error since the last communication point; 5: the
 // system saves the redundant constraint rows it leaves out (for every
-// stepper, in place of the Dormand-Prince stepper's own).
-constexpr std::uint32_t kFormatVersion = 5;
+// stepper, in place of the Dormand-Prince stepper's own); 6:
+// generalized-alpha saves the split of its error estimate (S_c, where it
+// was made, the motion range).
+constexpr std::uint32_t kFormatVersion = 6;
 constexpr std::size_t kFrameBytes = sizeof kMagic + 4 + 4 + 8 + 4;  // the header and CRC around GUID and payload
 
 // CRC-32 (reflected polynomial 0xEDB88320, initial and final XOR all ones):
