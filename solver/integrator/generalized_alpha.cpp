@@ -330,12 +330,19 @@ double GeneralizedAlpha::errorRatio(Dynamics& system, const IntegratorState& tri
   // and the split would not change the ratio.
   if (motion_.displacement.size() != n || !((motion_.high - motion_.low).array() > perStep).any())
     return local / perStep;
+  if (!(local > 0.0)) return 0.0;
+  // The residual is linear in vdot, so M e is its change by s e over s,
+  // with s e as large as vdot. By e itself, far smaller than vdot at tight
+  // tolerances, the change drowned in the residual's rounding, and the slow
+  // part came out as noise that no substep size reduced (F5 at 1e-6:
+  // discarded after a storm of rejected substeps at 2e-8 s).
+  const double s = std::exp2(std::ceil(std::log2((trial.vdot.cwiseAbs().maxCoeff() + 1.0) / local)));
   VectorXd& vdot = slowError_;  // workspace until the solve
-  vdot = trial.vdot + localError_;
+  vdot = trial.vdot + s * localError_;
   system.residual(trial.t, trial.q, trial.v, vdot, trial.lambda, massTimesError_, phi_);
   system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, r_, phi_);
   rhs_.setZero(cutoffMatrix_.matrix().rows());
-  rhs_.head(n) = massTimesError_ - r_;
+  rhs_.head(n) = (massTimesError_ - r_) / s;
   solveTurned(system, cutoff_, cutoffOrigin_.q, trial.q, rhs_, delta_);
   slowError_ = delta_.head(n);
   double slow = 0.0, fast = 0.0;
