@@ -31,8 +31,9 @@ constexpr char kMagic[8] = {'M', 'F', 'B', 'D', 'S', 'T', 'A', 'T'};
 // system saves the redundant constraint rows it leaves out (for every
 // stepper, in place of the Dormand-Prince stepper's own); 6:
 // generalized-alpha saves the split of its error estimate (S_c, where it
-// was made, the motion range).
-constexpr std::uint32_t kFormatVersion = 6;
+// was made, the motion range); 7: and the sum of its slow errors carried
+// along the motion.
+constexpr std::uint32_t kFormatVersion = 7;
 constexpr std::size_t kFrameBytes = sizeof kMagic + 4 + 4 + 8 + 4;  // the header and CRC around GUID and payload
 
 // CRC-32 (reflected polynomial 0xEDB88320, initial and final XOR all ones):

@@ -101,6 +101,22 @@ class GeneralizedAlpha : public TimeStepper {
       high = high.cwiseMax(displacement);
     }
   } motion_;
+  // A part of the local errors, slow or fast, summed along the motion: G
+  // in positions with its rates, accelerations and multipliers
+  // (propagateErrors). linearSum: what the part's local errors add up to if
+  // none cancels (the premise of holding them per unit step); largest: the
+  // most that G has reached. Both over the coordinates that have moved.
+  struct ErrorSum {
+    VectorXd q, v, a, vdot, lambda;
+    double linearSum = 0.0, largest = 0.0;
+    // How many times less than their sum the part's errors have added up to.
+    double cancellation() const { return largest > 0.0 ? std::max(1.0, linearSum / largest) : 1.0; }
+  } slowSum_, fastSum_;
+  void propagateErrors(Dynamics& system, const IntegratorState& trial, double h);
+  void propagate(Dynamics& system, const IntegratorState& trial, double h, ErrorSum& sum);
+  // Largest entry of x over the coordinates that have moved by tol L.
+  double largestMoving(const VectorXd& x) const;
+  VectorXd fastError_, predictedA_, phiBase_;  // errorRatio's and propagate's workspace
   MatrixRefreshPolicy refresh_;
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
@@ -121,6 +137,7 @@ class GeneralizedAlpha : public TimeStepper {
     ar(m.firstRate, m.lastRate, m.newtonErrorLeft, m.discretisationError);
     solver_.saveOrLoad(ar);
     ar(cutoffMatrix_, cutoffOrigin_.t, cutoffOrigin_.q, motion_.displacement, motion_.low, motion_.high);
+    for (ErrorSum* g : {&slowSum_, &fastSum_}) ar(g->q, g->v, g->a, g->vdot, g->lambda, g->linearSum, g->largest);
     cutoff_.saveOrLoad(ar);
   }
 };
