@@ -328,14 +328,14 @@ double GeneralizedAlpha::errorRatio(Dynamics& system, const IntegratorState& tri
   if (!splitsError()) return local / allowedLocalError(h);
   if (localError_.size() == 0) return 0.0;
   const int n = system.velocityCount();
+  baseResidual_ = false;
   // Unless split below, all of the estimate is fast.
   slowError_.setZero(n);
   fastError_ = localError_;
   if (std::isnan(cutoffOrigin_.t) && !factorizeCutoff(system, trial)) return local / perStep;
   // Nothing has moved by tol L yet: all of the estimate is held per step,
   // and the split would not change the ratio.
-  if (motion_.displacement.size() != n || !((motion_.high - motion_.low).array() > perStep).any())
-    return local / perStep;
+  if (!somethingMoved(n)) return local / perStep;
   if (!(local > 0.0)) return 0.0;
   // The residual is linear in vdot, so M e is its change by s e over s,
   // with s e as large as vdot. By e itself, far smaller than vdot at tight
@@ -348,9 +348,10 @@ double GeneralizedAlpha::errorRatio(Dynamics& system, const IntegratorState& tri
   VectorXd& vdot = slowError_;  // workspace until the solve
   vdot = trial.vdot + s * localError_;
   system.residual(trial.t, trial.q, trial.v, vdot, trial.lambda, massTimesError_, phi_);
-  system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, r_, phi_);
+  system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, base_, phiBase_);
+  baseResidual_ = true;
   rhs_.setZero(cutoffMatrix_.matrix().rows());
-  rhs_.head(n) = (massTimesError_ - r_) / s;
+  rhs_.head(n) = (massTimesError_ - base_) / s;
   solveTurned(system, cutoff_, cutoffOrigin_.q, trial.q, rhs_, delta_);
   slowError_ = delta_.head(n);
   for (int i = 0; i < n; ++i) {
@@ -362,6 +363,11 @@ double GeneralizedAlpha::errorRatio(Dynamics& system, const IntegratorState& tri
   const double cancellation = std::min(slowSum_.cancellation(), fastSum_.cancellation());
   const double allowedSlow = std::min(perStep, allowedLocalError(h) * cancellation);
   return std::max(slowError_.cwiseAbs().maxCoeff() / allowedSlow, fastError_.cwiseAbs().maxCoeff() / perStep);
+}
+
+bool GeneralizedAlpha::somethingMoved(int n) const {
+  const double perStep = options_.errorTolerance * options_.errorScale;
+  return motion_.displacement.size() == n && ((motion_.high - motion_.low).array() > perStep).any();
 }
 
 double GeneralizedAlpha::largestMoving(const VectorXd& x) const {
@@ -395,7 +401,7 @@ double GeneralizedAlpha::largestMoving(const VectorXd& x) const {
 // part's cancellation alone, 3.5 times by both). The fast part itself is
 // held per step: per unit step it would resolve the modes rho_inf damps.
 void GeneralizedAlpha::propagateErrors(Dynamics& system, const IntegratorState& trial, double h) {
-  system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, base_, phiBase_);
+  if (!baseResidual_) system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, base_, phiBase_);
   for (auto [g, added] : {std::pair{&slowSum_, &slowError_}, std::pair{&fastSum_, &fastError_}}) {
     propagate(system, trial, h, *g);
     g->q += *added;
@@ -532,7 +538,7 @@ bool GeneralizedAlpha::substep(Dynamics& system, IntegratorState& s, double h, s
     }
     if (splitsError()) {
       motion_.add(hDeltaQ_);
-      propagateErrors(system, trial, h);
+      if (somethingMoved(system.velocityCount())) propagateErrors(system, trial, h);
     }
   }
   trial.substeps = s.substeps + 1;

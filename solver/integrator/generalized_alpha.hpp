@@ -114,9 +114,12 @@ class GeneralizedAlpha : public TimeStepper {
   } slowSum_, fastSum_;
   void propagateErrors(Dynamics& system, const IntegratorState& trial, double h);
   void propagate(Dynamics& system, const IntegratorState& trial, double h, ErrorSum& sum);
-  // Largest entry of x over the coordinates that have moved by tol L.
+  // Whether any of the n coordinates has moved by tol L since the start;
+  // the largest entry of x over those that have.
+  bool somethingMoved(int n) const;
   double largestMoving(const VectorXd& x) const;
   VectorXd fastError_, predictedA_, phiBase_;  // errorRatio's and propagate's workspace
+  bool baseResidual_ = false;  // base_, phiBase_ hold the residual at the trial (errorRatio)
   MatrixRefreshPolicy refresh_;
   IntegratorState trial_;  // substep workspace (see substep)
   VectorXd hDeltaQ_, r_, phi_, rhs_, delta_;
