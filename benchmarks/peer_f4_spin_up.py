@@ -29,7 +29,8 @@ as an Exudyn symbolic user function (an expression tree evaluated in C++, so
 no Python call per Newton iteration).
 
 Ours by tolerance: our FMU driven by fmi2SetupExperiment's relative
-tolerance 1e-3 ... 1e-6 over the 20 s (stopTime passed), h_max = the output
+tolerance 1e-2 ... 1e-6 (peer_common.FLEXIBLE_TOLERANCES)
+over the 20 s (stopTime passed), h_max = the output
 interval 0.04 s, the FMU's choice of integrator (generalized-alpha, the
 local error split at h_max for flexible bodies), Newton tolerance
 following the error tolerance. One series over every mesh of the pairs (a user

@@ -35,7 +35,8 @@ what it imposes, an ObjectConnectorCoordinate holding the end node's y at 0
 Wall time: the whole 0.4 s run, outputs every 1 ms in both codes.
 
 Ours by tolerance: our FMU driven by fmi2SetupExperiment's relative
-tolerance 1e-3 ... 1e-6 over the 0.4 s (stopTime passed), h_max = the
+tolerance 1e-2 ... 1e-6 (peer_common.FLEXIBLE_TOLERANCES)
+over the 0.4 s (stopTime passed), h_max = the
 output interval 1e-3 s, the FMU's choice of integrator (generalized-alpha,
 the local error split at h_max for flexible bodies), Newton tolerance
 following the error tolerance. One series over every mesh of the pairs (a

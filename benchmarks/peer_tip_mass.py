@@ -33,7 +33,8 @@ rotation row makes the zero-inertia body's matrix regular, as our fixed
 joint does); the pulse a LoadForceVector with a symbolic user function.
 
 Ours by tolerance: our FMU driven by fmi2SetupExperiment's relative
-tolerance 1e-3 ... 1e-6 over the 10 s (stopTime passed), h_max = the output
+tolerance 1e-2 ... 1e-6 (peer_common.FLEXIBLE_TOLERANCES)
+over the 10 s (stopTime passed), h_max = the output
 interval 0.01 s (the coarsest h of the pairs), the FMU's choice of
 integrator (generalized-alpha, the local error split at h_max for
 flexible bodies), Newton tolerance following the error tolerance. One

@@ -398,7 +398,7 @@ double GeneralizedAlpha::largestMoving(const VectorXd& x) const {
 // fast part's own cancellation bounds it too: modes faster than 1 / h_max
 // that the substeps resolve keep their errors, held per step (F4 sampled
 // with h_max = 0.2 s: 8.9 times the tolerance at 1e-8 relaxed by the slow
-// part's cancellation alone, 3.5 times by both). The fast part itself is
+// part's cancellation alone, 3.0 times by both). The fast part itself is
 // held per step: per unit step it would resolve the modes rho_inf damps.
 void GeneralizedAlpha::propagateErrors(Dynamics& system, const IntegratorState& trial, double h) {
   if (!baseResidual_) system.residual(trial.t, trial.q, trial.v, trial.vdot, trial.lambda, base_, phiBase_);

@@ -313,7 +313,7 @@ def test_errors_of_a_forced_response_are_not_held_as_adding_up(tmp_path):
     # the nodes' circular motion lies in the slow bending modes, but as a
     # forced response it rings there rather than adding up. Held per unit
     # step as if it added up, tolerance 1e-3 took 8,189 substeps for 20 s;
-    # carried along the motion it is seen to cancel (1,954 substeps), and
+    # carried along the motion it is seen to cancel (1,953 substeps), and
     # the tip still ends within tol L of the same mesh's converged tip.
     scene = load_scene("spin_up_beam")
     scene["flexible_bodies"][0]["beam"]["elements"] = 2
