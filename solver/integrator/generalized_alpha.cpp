@@ -355,7 +355,7 @@ double GeneralizedAlpha::errorRatio(Dynamics& system, const IntegratorState& tri
   solveTurned(system, cutoff_, cutoffOrigin_.q, trial.q, rhs_, delta_);
   slowError_ = delta_.head(n);
   for (int i = 0; i < n; ++i) {
-    if (motion_.high[i] - motion_.low[i] > perStep)
+    if (moved(i))
       fastError_[i] = localError_[i] - slowError_[i];
     else
       slowError_[i] = 0.0;
@@ -365,16 +365,21 @@ double GeneralizedAlpha::errorRatio(Dynamics& system, const IntegratorState& tri
   return std::max(slowError_.cwiseAbs().maxCoeff() / allowedSlow, fastError_.cwiseAbs().maxCoeff() / perStep);
 }
 
+bool GeneralizedAlpha::moved(int i) const {
+  return motion_.high[i] - motion_.low[i] > options_.errorTolerance * options_.errorScale;
+}
+
 bool GeneralizedAlpha::somethingMoved(int n) const {
-  const double perStep = options_.errorTolerance * options_.errorScale;
-  return motion_.displacement.size() == n && ((motion_.high - motion_.low).array() > perStep).any();
+  if (motion_.displacement.size() != n) return false;
+  for (int i = 0; i < n; ++i)
+    if (moved(i)) return true;
+  return false;
 }
 
 double GeneralizedAlpha::largestMoving(const VectorXd& x) const {
-  const double perStep = options_.errorTolerance * options_.errorScale;
   double largest = 0.0;
   for (int i = 0; i < x.size(); ++i)
-    if (motion_.high[i] - motion_.low[i] > perStep) largest = std::max(largest, std::abs(x[i]));
+    if (moved(i)) largest = std::max(largest, std::abs(x[i]));
   return largest;
 }
 

@@ -114,8 +114,9 @@ class GeneralizedAlpha : public TimeStepper {
   } slowSum_, fastSum_;
   void propagateErrors(Dynamics& system, const IntegratorState& trial, double h);
   void propagate(Dynamics& system, const IntegratorState& trial, double h, ErrorSum& sum);
-  // Whether any of the n coordinates has moved by tol L since the start;
-  // the largest entry of x over those that have.
+  // Whether coordinate i, or any of the n, has moved by tol L since the
+  // start (MotionRange); the largest entry of x over those that have.
+  bool moved(int i) const;
   bool somethingMoved(int n) const;
   double largestMoving(const VectorXd& x) const;
   VectorXd fastError_, predictedA_, phiBase_;  // errorRatio's and propagate's workspace

@@ -3,6 +3,8 @@ local error estimate within each communication step (h_max an upper
 bound); a tolerance that cannot be met above h_min is an fmi2Discard with
 the state of the step start. Stiff scenes that a fixed step gets wrong with
 fmi2OK (issue 18) come out right or are discarded."""
+import re
+
 import numpy as np
 from fmpy import simulate_fmu
 from fmpy.model_description import read_model_description
@@ -240,9 +242,7 @@ def test_flexible_error_follows_the_tolerance(tmp_path):
 
 
 def substeps_of_a_run(fmu, tolerance, stop, start_values):
-    """Substeps and rejected substeps of a run in steps of 0.01 s (the
-    logStatistics line of fmi2Terminate)."""
-    import re
+    """Substeps and rejected substeps of a run in steps of 0.01 s."""
     slave = Slave(fmu)
     try:
         assert slave.instantiate(logging_on=True), slave.messages()
@@ -253,11 +253,17 @@ def substeps_of_a_run(fmu, tolerance, stop, start_values):
         assert slave.call("enterInitializationMode") == OK and slave.call("exitInitializationMode") == OK
         for k in range(int(round(stop / 0.01))):
             assert slave.step(0.01 * k, 0.01) == OK, slave.messages()
-        assert slave.call("terminate") == OK
-        line = [m for _, c, m in slave.log if c == "logStatistics"][-1]
-        return int(re.search(r"substeps (\d+)", line).group(1)), int(re.search(r"rejected (\d+)", line).group(1))
+        return logged_substeps(slave)
     finally:
         slave.free()
+
+
+def logged_substeps(slave):
+    """Terminates the run; its substeps and rejected substeps (the
+    logStatistics line of fmi2Terminate)."""
+    assert slave.call("terminate") == OK
+    line = [m for _, c, m in slave.log if c == "logStatistics"][-1]
+    return int(re.search(r"substeps (\d+)", line).group(1)), int(re.search(r"rejected (\d+)", line).group(1))
 
 
 def test_motion_within_the_tolerance_is_not_refined(tmp_path):
@@ -290,7 +296,6 @@ def test_tight_tolerance_on_a_stiff_mechanism_is_met_without_a_storm(tmp_path):
 def spin_up_tip(fmu, tolerance, h_max, stop=20.0, interval=0.04):
     """The tip of spin_up_beam (2 elements) at `stop`, stepping by
     `interval`, and the substeps taken."""
-    import re
     slave = Slave(fmu)
     try:
         assert slave.instantiate(logging_on=True), slave.messages()
@@ -301,9 +306,7 @@ def spin_up_tip(fmu, tolerance, h_max, stop=20.0, interval=0.04):
         for k in range(int(round(stop / interval))):
             assert slave.step(interval * k, interval) == OK, slave.messages()
         tip = np.array([slave.get("beam.node2.position.x"), slave.get("beam.node2.position.y")])
-        assert slave.call("terminate") == OK
-        line = [m for _, c, m in slave.log if c == "logStatistics"][-1]
-        return tip, int(re.search(r"substeps (\d+)", line).group(1))
+        return tip, logged_substeps(slave)[0]
     finally:
         slave.free()
 
