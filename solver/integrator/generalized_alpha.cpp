@@ -394,8 +394,8 @@ double GeneralizedAlpha::largestMoving(const VectorXd& x) const {
 // G, as the integrator carries any perturbation: each accepted substep
 // propagates G through the substep linearized about the motion (a Newton
 // iteration of the substep from G, residual differences along a scaled G,
-// solved with the kept Newton matrix until a correction falls below 1e-3
-// of G, at most three) and adds its own part. The slow part is held per
+// solved with the kept Newton matrix until the error left falls below
+// 1e-3 of G, at most three corrections) and adds its own part. The slow part is held per
 // unit step times how many times less than the sum of their sizes the
 // errors have added up to (ErrorSum::cancellation), never above per step.
 // Where G grows with the sum (resonance, an unstable motion, a
@@ -432,6 +432,7 @@ void GeneralizedAlpha::propagate(Dynamics& system, const IntegratorState& trial,
   g.a = predictedA_;
   const double betaPrime = (1.0 - alphaM_) / (beta_ * h * h * (1.0 - alphaF_));
   const double gammaPrime = gamma_ / (beta_ * h);
+  double previous = 0.0;
   for (int correction = 0; correction < 3; ++correction) {
     const double size = g.q.cwiseAbs().maxCoeff();
     if (!(size > 0.0)) return;
@@ -455,7 +456,14 @@ void GeneralizedAlpha::propagate(Dynamics& system, const IntegratorState& trial,
     g.vdot += betaPrime * delta_.head(n);
     g.a += (1.0 - alphaF_) / (1.0 - alphaM_) * betaPrime * delta_.head(n);
     g.lambda += betaPrime * delta_.segment(n, m);
-    if (delta_.head(n).cwiseAbs().maxCoeff() <= 1e-3 * size) return;
+    // Converged when the error left, rate / (1 - rate) times the
+    // correction as for the substep's own Newton (ErrorLeftTest), is below
+    // 1e-3 of G; at the first correction, with no rate yet, the correction.
+    const double corrected = delta_.head(n).cwiseAbs().maxCoeff();
+    const double rate = correction > 0 ? corrected / previous : 0.0;
+    const double left = correction == 0 ? corrected : rate < 1.0 ? rate / (1.0 - rate) * corrected : HUGE_VAL;
+    if (left <= 1e-3 * size) return;
+    previous = corrected;
   }
 }
 
