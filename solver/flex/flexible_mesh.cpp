@@ -52,8 +52,10 @@ void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const 
       } else {
         if (drives.samples.size() != mesh.drives.size()) drives.samples.resize(mesh.drives.size());
         DriveState::Sample& sample = drives.samples[n.drive];
-        if (!(sample.t == t && sample.stepStart == drives.stepStart))
-          sample = {t, drives.stepStart, d.angle(t), d.angle.rate(t), d.angle.acceleration(t)};
+        if (!(sample.t == t && sample.stepStart == drives.stepStart)) {
+          const Expression::Jet angle = d.angle.jet(t);
+          sample = {t, drives.stepStart, angle.value, angle.first, angle.second};
+        }
         angle = sample.angle;
         rate = sample.rate;
         acceleration = sample.acceleration;

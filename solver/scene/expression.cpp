@@ -51,7 +51,7 @@ class Parser {
     ~Nesting() { --p_.depth_; }
     Parser& p_;
   };
-  void emit(Op op, double value = 0.0, double (*function)(double) = nullptr) {
+  void emit(Op op, double value = 0.0, const Expression::Function* function = nullptr) {
     program_.push_back({op, value, function});
   }
   void skipSpace() {
@@ -179,16 +179,31 @@ class Parser {
       arity(3);
       return emit(Op::If);
     }
-    static const std::map<std::string, double (*)(double)> functions = {
-        {"sqrt", [](double x) { return std::sqrt(x); }}, {"sin", [](double x) { return std::sin(x); }},
-        {"cos", [](double x) { return std::cos(x); }},   {"tan", [](double x) { return std::tan(x); }},
-        {"asin", [](double x) { return std::asin(x); }}, {"acos", [](double x) { return std::acos(x); }},
-        {"atan", [](double x) { return std::atan(x); }}, {"exp", [](double x) { return std::exp(x); }},
-        {"log", [](double x) { return std::log(x); }},   {"abs", [](double x) { return std::abs(x); }}};
+    static const std::map<std::string, Expression::Function> functions = {
+        {"sqrt", {[](double x) { return std::sqrt(x); }, [](double x) { return 0.5 / std::sqrt(x); },
+                  [](double x) { return -0.25 / (x * std::sqrt(x)); }}},
+        {"sin", {[](double x) { return std::sin(x); }, [](double x) { return std::cos(x); },
+                 [](double x) { return -std::sin(x); }}},
+        {"cos", {[](double x) { return std::cos(x); }, [](double x) { return -std::sin(x); },
+                 [](double x) { return -std::cos(x); }}},
+        {"tan", {[](double x) { return std::tan(x); }, [](double x) { return 1.0 + std::tan(x) * std::tan(x); },
+                 [](double x) { return 2.0 * std::tan(x) * (1.0 + std::tan(x) * std::tan(x)); }}},
+        {"asin", {[](double x) { return std::asin(x); }, [](double x) { return 1.0 / std::sqrt(1.0 - x * x); },
+                  [](double x) { return x / std::pow(1.0 - x * x, 1.5); }}},
+        {"acos", {[](double x) { return std::acos(x); }, [](double x) { return -1.0 / std::sqrt(1.0 - x * x); },
+                  [](double x) { return -x / std::pow(1.0 - x * x, 1.5); }}},
+        {"atan", {[](double x) { return std::atan(x); }, [](double x) { return 1.0 / (1.0 + x * x); },
+                  [](double x) { return -2.0 * x / ((1.0 + x * x) * (1.0 + x * x)); }}},
+        {"exp", {[](double x) { return std::exp(x); }, [](double x) { return std::exp(x); },
+                 [](double x) { return std::exp(x); }}},
+        {"log", {[](double x) { return std::log(x); }, [](double x) { return 1.0 / x; },
+                 [](double x) { return -1.0 / (x * x); }}},
+        {"abs", {[](double x) { return std::abs(x); }, [](double x) { return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0; },
+                 [](double) { return 0.0; }}}};
     const auto it = functions.find(f);
     if (it == functions.end()) fail("unknown function '" + f + "'");
     arity(1);
-    emit(Op::Function, 0.0, it->second);
+    emit(Op::Function, 0.0, &it->second);
   }
 
   const std::string& s_;
@@ -207,13 +222,60 @@ Expression::Expression(const std::string& text, const std::map<std::string, doub
   Parser(text, parameters, variable, program_).parse();
 }
 
+// The operations of the stack machine on a value (double) and on a Jet,
+// whose first and second derivatives follow by the product, quotient and
+// chain rules.
+namespace {
+
+using Jet = Expression::Jet;
+
+double apply(const Expression::Function& f, double x) { return f.value(x); }
+Jet apply(const Expression::Function& f, const Jet& x) {
+  const double d1 = f.first(x.value);
+  return {f.value(x.value), d1 * x.first, f.second(x.value) * x.first * x.first + d1 * x.second};
+}
+double value(double x) { return x; }
+double value(const Jet& x) { return x.value; }
+
+Jet operator-(const Jet& a) { return {-a.value, -a.first, -a.second}; }
+Jet operator+(const Jet& a, const Jet& b) { return {a.value + b.value, a.first + b.first, a.second + b.second}; }
+Jet operator-(const Jet& a, const Jet& b) { return {a.value - b.value, a.first - b.first, a.second - b.second}; }
+Jet operator*(const Jet& a, const Jet& b) {
+  return {a.value * b.value, a.first * b.value + a.value * b.first,
+          a.second * b.value + 2.0 * a.first * b.first + a.value * b.second};
+}
+Jet operator/(const Jet& a, const Jet& b) {
+  const double q = a.value / b.value, q1 = (a.first - q * b.first) / b.value;
+  return {q, q1, (a.second - 2.0 * q1 * b.first - q * b.second) / b.value};
+}
+
+double power(double a, double b) { return b == 2.0 ? a * a : std::pow(a, b); }  // squares are the common case
+// a^b: a constant exponent differentiates as b a^(b-1) (any a); a varying
+// one as exp(b log a) (a > 0).
+Jet power(const Jet& a, const Jet& b) {
+  const double p = power(a.value, b.value);
+  if (b.first == 0.0 && b.second == 0.0) {
+    const double n = b.value;
+    const double d1 = n == 0.0 ? 0.0 : n == 2.0 ? 2.0 * a.value : n * std::pow(a.value, n - 1.0);
+    const double d2 = n == 0.0 || n == 1.0 ? 0.0 : n == 2.0 ? 2.0 : n * (n - 1.0) * std::pow(a.value, n - 2.0);
+    return {p, d1 * a.first, d2 * a.first * a.first + d1 * a.second};
+  }
+  const Jet log = {std::log(a.value), a.first / a.value,
+                   a.second / a.value - (a.first / a.value) * (a.first / a.value)};
+  const Jet w = b * log;
+  return {p, p * w.first, p * (w.second + w.first * w.first)};
+}
+
+}  // namespace
+
 // A stack machine over the postfix program; the parser's grammar bounds the
 // depth by the program length.
-double Expression::operator()(double variable) const {
+template <class T>
+T Expression::evaluate(const T& variable) const {
   constexpr std::size_t kSmall = 32;
-  double small[kSmall] = {};
-  std::vector<double> large;
-  double* stack = small;
+  T small[kSmall] = {};
+  std::vector<T> large;
+  T* stack = small;
   if (program_.size() > kSmall) {
     large.resize(program_.size());
     stack = large.data();
@@ -221,25 +283,25 @@ double Expression::operator()(double variable) const {
   std::size_t top = 0;  // number of values on the stack
   for (const Instruction& i : program_) {
     switch (i.op) {
-      case Op::Number: stack[top++] = i.value; break;
+      case Op::Number: stack[top++] = T{i.value}; break;
       case Op::Variable: stack[top++] = variable; break;
       case Op::Negate: stack[top - 1] = -stack[top - 1]; break;
-      case Op::Function: stack[top - 1] = i.function(stack[top - 1]); break;
+      case Op::Function: stack[top - 1] = apply(*i.function, stack[top - 1]); break;
       case Op::If:
         top -= 2;
-        stack[top - 1] = stack[top - 1] > 0.0 ? stack[top] : stack[top + 1];
+        stack[top - 1] = value(stack[top - 1]) > 0.0 ? stack[top] : stack[top + 1];
         break;
       default: {
-        const double b = stack[--top];
-        double& a = stack[top - 1];
+        const T b = stack[--top];
+        T& a = stack[top - 1];
         switch (i.op) {
-          case Op::Add: a += b; break;
-          case Op::Subtract: a -= b; break;
-          case Op::Multiply: a *= b; break;
-          case Op::Divide: a /= b; break;
-          case Op::Power: a = b == 2.0 ? a * a : std::pow(a, b); break;  // squares are the common case
-          case Op::Min: a = std::min(a, b); break;
-          case Op::Max: a = std::max(a, b); break;
+          case Op::Add: a = a + b; break;
+          case Op::Subtract: a = a - b; break;
+          case Op::Multiply: a = a * b; break;
+          case Op::Divide: a = a / b; break;
+          case Op::Power: a = power(a, b); break;
+          case Op::Min: a = value(b) < value(a) ? b : a; break;
+          case Op::Max: a = value(a) < value(b) ? b : a; break;
           default: break;
         }
       }
@@ -247,6 +309,10 @@ double Expression::operator()(double variable) const {
   }
   return stack[0];
 }
+
+double Expression::operator()(double variable) const { return evaluate(variable); }
+
+Expression::Jet Expression::jet(double variable) const { return evaluate(Jet{variable, 1.0, 0.0}); }
 
 double evaluateExpression(const std::string& text, const std::map<std::string, double>& parameters) {
   return Expression(text, parameters)();

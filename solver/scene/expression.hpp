@@ -21,15 +21,28 @@ class Expression {
   Expression(const std::string& text, const std::map<std::string, double>& parameters,
              const std::string& variable = "");
   double operator()(double variable = 0.0) const;
+  // The value and its first two derivatives in the free variable, exact
+  // (forward-mode differentiation of the program, one pass): a drive's
+  // rate and acceleration.
+  struct Jet {
+    double value = 0.0, first = 0.0, second = 0.0;
+  };
+  Jet jet(double variable) const;
 
   enum class Op { Number, Variable, Add, Subtract, Multiply, Divide, Power, Negate, Min, Max, If, Function };
+  // A function of one argument with its first and second derivatives.
+  struct Function {
+    double (*value)(double), (*first)(double), (*second)(double);
+  };
   struct Instruction {
     Op op = Op::Number;
-    double value = 0.0;              // Number
-    double (*function)(double) = nullptr;  // Function
+    double value = 0.0;                  // Number
+    const Function* function = nullptr;  // Function
   };
 
  private:
+  template <class T>
+  T evaluate(const T& variable) const;
   std::vector<Instruction> program_{Instruction{Op::Number, 1.0, nullptr}};
 };
 

@@ -56,7 +56,7 @@ TimeFunction TimeFunction::table(const std::vector<double>& times, const std::ve
 
 // On [t_i, t_{i+1}] with a = t_{i+1} - t, b = t - t_i:
 //   S = M_i a^3/(6h) + M_{i+1} b^3/(6h) + (y_i/h - M_i h/6) a + (y_{i+1}/h - M_{i+1} h/6) b.
-TimeFunction::SplinePoint TimeFunction::spline(double t) const {
+Expression::Jet TimeFunction::spline(double t) const {
   if (t <= times_.front()) return {values_.front(), 0.0, 0.0};
   if (t >= times_.back()) return {values_.back(), 0.0, 0.0};
   const std::size_t i = std::size_t(std::upper_bound(times_.begin(), times_.end(), t) - times_.begin()) - 1;
@@ -71,17 +71,13 @@ double TimeFunction::operator()(double t) const {
   return times_.empty() ? expression_(t) : spline(t).value;
 }
 
-// Steps balance truncation (h^2) against round-off (eps/h, eps/h^2).
-double TimeFunction::rate(double t) const {
-  if (!times_.empty()) return spline(t).rate;
-  const double h = 1e-5 * std::max(1.0, std::abs(t));
-  return ((*this)(t + h) - (*this)(t - h)) / (2.0 * h);
-}
+double TimeFunction::rate(double t) const { return jet(t).first; }
 
-double TimeFunction::acceleration(double t) const {
-  if (!times_.empty()) return spline(t).acceleration;
-  const double h = 1e-4 * std::max(1.0, std::abs(t));
-  return ((*this)(t + h) - 2.0 * (*this)(t) + (*this)(t - h)) / (h * h);
+double TimeFunction::acceleration(double t) const { return jet(t).second; }
+
+Expression::Jet TimeFunction::jet(double t) const {
+  if (!times_.empty()) return spline(t);
+  return expression_.jet(t);
 }
 
 }  // namespace mfbd

@@ -30,17 +30,15 @@ class TimeFunction {
   static TimeFunction table(const std::vector<double>& times, const std::vector<double>& values);
 
   double operator()(double t) const;
-  // d/dt and d2/dt2: exact for tables; by central differences for
-  // expressions (smooth expressions assumed).
+  // d/dt and d2/dt2, exact (the spline's, or the expression's by
+  // forward-mode differentiation); jet: all three at once.
   double rate(double t) const;
   double acceleration(double t) const;
+  Expression::Jet jet(double t) const;
 
  private:
   // The table spline's value, rate and acceleration at t.
-  struct SplinePoint {
-    double value, rate, acceleration;
-  };
-  SplinePoint spline(double t) const;
+  Expression::Jet spline(double t) const;
 
   Expression expression_;
   std::vector<double> times_, values_, moments_;  // table: moments = second derivatives at the points

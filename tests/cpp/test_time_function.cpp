@@ -61,14 +61,66 @@ TEST(Expression, PrecedenceFunctionsAndTheTimeVariable) {
   const TimeFunction f("a*t^2 + if(t - 1, b, 0)", p);
   EXPECT_DOUBLE_EQ(f(0.5), 0.5);
   EXPECT_DOUBLE_EQ(f(2.0), 11.0);
-  EXPECT_NEAR(f.rate(0.5), 2.0, 1e-9);
-  EXPECT_NEAR(f.acceleration(0.5), 4.0, 1e-6);
+  EXPECT_DOUBLE_EQ(f.rate(0.5), 2.0);
+  EXPECT_DOUBLE_EQ(f.acceleration(0.5), 4.0);
   EXPECT_DOUBLE_EQ(TimeFunction()(3.0), 1.0);
   EXPECT_THROW(evaluateExpression("t + 1", p), std::invalid_argument);  // no time outside time functions
   EXPECT_THROW(evaluateExpression("sin(1, 2)", p), std::invalid_argument);
   EXPECT_THROW(evaluateExpression("foo(1)", p), std::invalid_argument);
   EXPECT_THROW(evaluateExpression("(1 + 2", p), std::invalid_argument);
   EXPECT_THROW(TimeFunction("t * c", p), std::invalid_argument);
+}
+
+// A drive's rate and acceleration are the expression's derivatives by
+// forward-mode differentiation: against the closed forms, to round-off, for
+// every function and operation (a varying exponent included), and against
+// central differences of the value.
+TEST(TimeFunction, ExpressionDerivativesAreExact) {
+  struct Case {
+    const char* text;
+    double (*f1)(double);
+    double (*f2)(double);
+  };
+  const Case cases[] = {
+      {"sqrt(1 + t)", [](double t) { return 0.5 / std::sqrt(1 + t); },
+       [](double t) { return -0.25 / std::pow(1 + t, 1.5); }},
+      {"sin(3*t)", [](double t) { return 3 * std::cos(3 * t); }, [](double t) { return -9 * std::sin(3 * t); }},
+      {"cos(t^2)", [](double t) { return -2 * t * std::sin(t * t); },
+       [](double t) { return -2 * std::sin(t * t) - 4 * t * t * std::cos(t * t); }},
+      {"tan(t)", [](double t) { return 1 / (std::cos(t) * std::cos(t)); },
+       [](double t) { return 2 * std::tan(t) / (std::cos(t) * std::cos(t)); }},
+      {"asin(t/2) - acos(t/2)", [](double t) { return 2 / std::sqrt(4 - t * t); },
+       [](double t) { return 2 * t / std::pow(4 - t * t, 1.5); }},
+      {"atan(2*t)", [](double t) { return 2 / (1 + 4 * t * t); },
+       [](double t) { return -16 * t / ((1 + 4 * t * t) * (1 + 4 * t * t)); }},
+      {"exp(-t)*log(2 + t)", [](double t) { return std::exp(-t) * (1 / (2 + t) - std::log(2 + t)); },
+       [](double t) { return std::exp(-t) * (std::log(2 + t) - 2 / (2 + t) - 1 / ((2 + t) * (2 + t))); }},
+      {"t^3 - 1/(1 + t^2)", [](double t) { return 3 * t * t + 2 * t / ((1 + t * t) * (1 + t * t)); },
+       [](double t) { return 6 * t + (2 - 6 * t * t) / std::pow(1 + t * t, 3); }},
+      {"2^t + t^t", [](double t) { return std::pow(2, t) * std::log(2) + std::pow(t, t) * (1 + std::log(t)); },
+       [](double t) {
+         return std::pow(2, t) * std::log(2) * std::log(2) +
+                std::pow(t, t) * ((1 + std::log(t)) * (1 + std::log(t)) + 1 / t);
+       }},
+      {"abs(t - 1) + min(t, 1) + max(t^2, 0) + if(t - 0.5, t^2, -t)",
+       [](double t) { return -1 + 1 + 2 * t + (t > 0.5 ? 2 * t : -1.0); },
+       [](double t) { return 2 + (t > 0.5 ? 2.0 : 0.0); }},
+  };
+  for (const Case& c : cases) {
+    const TimeFunction f(c.text, {});
+    for (double t : {0.3, 0.7}) {
+      SCOPED_TRACE(std::string(c.text) + " at t = " + numberText(t));
+      const Expression::Jet jet = f.jet(t);
+      EXPECT_DOUBLE_EQ(jet.value, f(t));
+      EXPECT_NEAR(jet.first, c.f1(t), 1e-14 * (1 + std::abs(c.f1(t))));
+      EXPECT_NEAR(jet.second, c.f2(t), 1e-13 * (1 + std::abs(c.f2(t))));
+      EXPECT_EQ(f.rate(t), jet.first);
+      EXPECT_EQ(f.acceleration(t), jet.second);
+      const double h = 1e-4;
+      EXPECT_NEAR(jet.first, (f(t + h) - f(t - h)) / (2 * h), 1e-7 * (1 + std::abs(jet.first)));
+      EXPECT_NEAR(jet.second, (f(t + h) - 2 * f(t) + f(t - h)) / (h * h), 1e-4 * (1 + std::abs(jet.second)));
+    }
+  }
 }
 
 TEST(TimeFunction, TableReproducesACubicAtRestAtItsEnds) {
