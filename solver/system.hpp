@@ -4,6 +4,8 @@
 // loads, drives). Velocities: joint rates first, then free node DOFs.
 #pragma once
 #include <Eigen/Cholesky>
+#include <utility>
+#include <vector>
 
 #include "flex/flexible_mesh.hpp"
 #include "integrator/dynamics.hpp"
@@ -180,6 +182,9 @@ class System : public Dynamics {
   DriveState drives_;
   std::vector<double> jointDriveStart_;  // per joint: a rate-input drive's coordinate at the step start
   double jointDriveStepStart_ = 0.0;
+  // Per joint: an expression drive's last (t, coordinate), a pure function
+  // of t evaluated once for the many residuals at one time.
+  mutable std::vector<std::pair<double, double>> driveSamples_;
   std::vector<NodeState> nodes_;
   VectorXd tau_, rigid_;
   Eigen::MatrixXd massMatrix_;  // joint-space, of rigidTangent and unconstrainedAccelerations
