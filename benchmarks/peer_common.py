@@ -44,8 +44,12 @@ TOLERANCES = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8]
 # asks for. They stop at 1e-6: below it the error of the modes under
 # h_max, held per unit step, costs minutes per run on the fine meshes (F3
 # n = 2 at 1e-8: 38 s for its 10 s), and the mesh's error is far above
-# the time error there.
-FLEXIBLE_TOLERANCES = [1e-2] + TOLERANCES[:4]
+# the time error there. Half decades between: Exudyn's front halves its
+# step, a factor of about 4 in error per level at second order, and ours
+# is sampled as finely (a factor of 10 overshot the error levels by up to
+# 10: F4's elongation at 1e-7 reached 8.6e-9 at tolerance 1e-4, 2.2e-7 at
+# 1e-3).
+FLEXIBLE_TOLERANCES = [1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6]
 
 
 def best_of(run, repeats, min_total=0.5, max_repeats=25):
