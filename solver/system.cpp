@@ -53,7 +53,8 @@ void System::startDrives(double t0) {
 
 double System::driveCoordinate(const Joint& joint, double t) const {
   const std::size_t k = std::size_t(&joint - model_.joints.data());
-  if (joint.driveRateInput) return jointDriveStart_[k] + jointSignals_.integral(joint.inputOffset, jointDriveStepStart_, t);
+  if (joint.driveRateInput)
+    return jointDriveStart_[k] + jointSignals_.integral(joint.inputOffset, jointDriveStepStart_, t);
   if (driveSamples_.size() != model_.joints.size())
     driveSamples_.assign(model_.joints.size(), {std::numeric_limits<double>::quiet_NaN(), 0.0});
   auto& [at, coordinate] = driveSamples_[k];

@@ -395,9 +395,10 @@ double GeneralizedAlpha::largestMoving(const VectorXd& x) const {
 // propagates G through the substep linearized about the motion (a Newton
 // iteration of the substep from G, residual differences along a scaled G,
 // solved with the kept Newton matrix until the error left falls below
-// 1e-3 of G, at most three corrections) and adds its own part. The slow part is held per
-// unit step times how many times less than the sum of their sizes the
-// errors have added up to (ErrorSum::cancellation), never above per step.
+// 1e-3 of G, at most three corrections) and adds its own part. The slow
+// part is held per unit step times how many times less than the sum of
+// their sizes the errors have added up to (ErrorSum::cancellation), never
+// above per step.
 // Where G grows with the sum (resonance, an unstable motion, a
 // propagation that did not converge) that is 1: per unit step. The
 // fast part's own cancellation bounds it too: modes faster than 1 / h_max
