@@ -55,14 +55,8 @@ double System::driveCoordinate(const Joint& joint, double t) const {
   const std::size_t k = std::size_t(&joint - model_.joints.data());
   if (joint.driveRateInput)
     return jointDriveStart_[k] + jointSignals_.integral(joint.inputOffset, jointDriveStepStart_, t);
-  if (driveSamples_.size() != model_.joints.size())
-    driveSamples_.assign(model_.joints.size(), {std::numeric_limits<double>::quiet_NaN(), 0.0});
-  auto& [at, coordinate] = driveSamples_[k];
-  if (!(at == t)) {
-    at = t;
-    coordinate = joint.drive(t);
-  }
-  return coordinate;
+  if (driveSamples_.size() != model_.joints.size()) driveSamples_.resize(model_.joints.size());
+  return joint.drive.jet(t, driveSamples_[k]).value;
 }
 
 void System::inputsAt(double t) {

@@ -4,7 +4,6 @@
 // loads, drives). Velocities: joint rates first, then free node DOFs.
 #pragma once
 #include <Eigen/Cholesky>
-#include <utility>
 #include <vector>
 
 #include "flex/flexible_mesh.hpp"
@@ -117,7 +116,8 @@ class System : public Dynamics {
     ar(redundantRows_);
     for (Joint& j : model_.joints) ar(j.damping);
     for (FlexElement& e : model_.flexible.elements) ar(e.damping);
-    drives_.samples.clear();  // a cache of time functions, recomputed alike
+    drives_.samples.clear();  // caches of time functions, recomputed alike
+    driveSamples_.clear();
   }
   // The saved sizes match this model.
   bool stateFits() const;
@@ -182,9 +182,8 @@ class System : public Dynamics {
   DriveState drives_;
   std::vector<double> jointDriveStart_;  // per joint: a rate-input drive's coordinate at the step start
   double jointDriveStepStart_ = 0.0;
-  // Per joint: an expression drive's last (t, coordinate), a pure function
-  // of t evaluated once for the many residuals at one time.
-  mutable std::vector<std::pair<double, double>> driveSamples_;
+  // Per joint: its drive law for the last time asked (TimeFunction::Sample).
+  mutable std::vector<TimeFunction::Sample> driveSamples_;
   std::vector<NodeState> nodes_;
   VectorXd tau_, rigid_;
   Eigen::MatrixXd massMatrix_;  // joint-space, of rigidTangent and unconstrainedAccelerations

@@ -51,14 +51,10 @@ void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const 
         acceleration = inputs.rate(d.inputOffset, t);
       } else {
         if (drives.samples.size() != mesh.drives.size()) drives.samples.resize(mesh.drives.size());
-        DriveState::Sample& sample = drives.samples[n.drive];
-        if (!(sample.t == t && sample.stepStart == drives.stepStart)) {
-          const Expression::Jet angle = d.angle.jet(t);
-          sample = {t, drives.stepStart, angle.value, angle.first, angle.second};
-        }
-        angle = sample.angle;
-        rate = sample.rate;
-        acceleration = sample.acceleration;
+        const Expression::Jet& law = d.angle.jet(t, drives.samples[n.drive]);
+        angle = law.value;
+        rate = law.first;
+        acceleration = law.second;
       }
       s.pose.A = expSO3(d.axis * angle) * n.reference.A;
       // The axis is fixed in the world: omega_node = A^T axis rate, and its

@@ -93,16 +93,9 @@ struct DriveState {
   std::vector<double> startAngle;  // rate-input drives: angle at the step start
   double stepStart = 0.0;
   double angle(const FlexibleMesh& mesh, const InputSignals& inputs, int drive, double t) const;
-  // Angle, rate and acceleration of a time-function drive, kept for the
-  // last time asked (the Newton iterations of a substep all ask at its end
-  // time; rate and acceleration are finite differences, five evaluations
-  // of the expression). Keyed by the time and the step start, so a new
-  // step (endStep, startDrives) evaluates afresh.
-  struct Sample {
-    double t = std::numeric_limits<double>::quiet_NaN(), stepStart = 0.0;
-    double angle = 0.0, rate = 0.0, acceleration = 0.0;
-  };
-  mutable std::vector<Sample> samples;
+  // Per drive: a time-function drive's angle, rate and acceleration for
+  // the last time asked (TimeFunction::Sample).
+  mutable std::vector<TimeFunction::Sample> samples;
 };
 
 void flexibleNodeStates(const FlexibleMesh& mesh, const Configuration& q, const VectorXd& v, const VectorXd& vdot,

@@ -256,8 +256,9 @@ Jet power(const Jet& a, const Jet& b) {
   const double p = power(a.value, b.value);
   if (b.first == 0.0 && b.second == 0.0) {
     const double n = b.value;
-    const double d1 = n == 0.0 ? 0.0 : n == 2.0 ? 2.0 * a.value : n * std::pow(a.value, n - 1.0);
-    const double d2 = n == 0.0 || n == 1.0 ? 0.0 : n == 2.0 ? 2.0 : n * (n - 1.0) * std::pow(a.value, n - 2.0);
+    // n = 0 and 1 spelled out: a = 0 would make them 0 * inf.
+    const double d1 = n == 0.0 ? 0.0 : n * std::pow(a.value, n - 1.0);
+    const double d2 = n == 0.0 || n == 1.0 ? 0.0 : n * (n - 1.0) * std::pow(a.value, n - 2.0);
     return {p, d1 * a.first, d2 * a.first * a.first + d1 * a.second};
   }
   const Jet log = {std::log(a.value), a.first / a.value,

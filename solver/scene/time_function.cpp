@@ -80,4 +80,9 @@ Expression::Jet TimeFunction::jet(double t) const {
   return expression_.jet(t);
 }
 
+const Expression::Jet& TimeFunction::jet(double t, Sample& kept) const {
+  if (!(kept.t == t)) kept = {t, jet(t)};
+  return kept.jet;
+}
+
 }  // namespace mfbd

@@ -3,6 +3,7 @@
 // points. Used for load scales, driven supports of flexible nodes and rigid
 // joint drives, whose rate and acceleration are used too.
 #pragma once
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -35,6 +36,14 @@ class TimeFunction {
   double rate(double t) const;
   double acceleration(double t) const;
   Expression::Jet jet(double t) const;
+  // The jet kept for the last time asked: the many residuals of a substep
+  // all ask at its end time. Workspace of whoever asks (a pure function of
+  // t, nothing to save with a state).
+  struct Sample {
+    double t = std::numeric_limits<double>::quiet_NaN();
+    Expression::Jet jet;
+  };
+  const Expression::Jet& jet(double t, Sample& kept) const;
 
  private:
   // The table spline's value, rate and acceleration at t.
